@@ -1,0 +1,54 @@
+// The patch mesh: polygons split into planar patches (triangles or convex
+// quads) of at most max_patch_area, and the patch faces that carry radiosity.
+// Face i < patch count is the front of patch i; two-sided patches add a back
+// face after those. The back of a one-sided patch is black and has no face.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "scene.h"
+
+namespace mpath {
+
+struct Patch {
+  std::array<uint32_t, 4> v{};  // corners; v[3] == v[2] for a triangle
+  Vec3 normal;                  // unit front normal
+  double area = 0;
+  int polygon = 0;
+  int object = 0;
+  int material = 0;
+  std::array<int, 2> face{-1, -1};  // front and back face, -1 for a black back
+
+  bool is_triangle() const { return v[3] == v[2]; }
+};
+
+struct PatchMesh {
+  std::vector<Vec3> vertices;
+  std::vector<Patch> patches;
+  std::vector<int> face_patch;     // face -> patch
+  std::vector<uint8_t> face_side;  // face -> 0 front, 1 back
+  double max_patch_area = 0;
+  size_t dropped_polygons = 0;     // degenerate polygons left out
+  Bounds bounds;
+
+  size_t face_count() const { return face_patch.size(); }
+  // Unit normal of a face (the back face points against the patch normal).
+  Vec3 face_normal(int face) const {
+    const Vec3& n = patches[face_patch[face]].normal;
+    return face_side[face] ? -n : n;
+  }
+  double face_area(int face) const { return patches[face_patch[face]].area; }
+};
+
+// Automatic patch size: the scene box's surface area / 2000.
+double automatic_patch_area(const Scene& scene);
+
+PatchMesh build_mesh(const Scene& scene, double max_patch_area);
+
+// Splits a simple polygon into triangles (ear clipping in its plane); returns
+// index triples into `polygon`. Falls back to a fan if the polygon is not simple.
+std::vector<std::array<uint32_t, 3>> triangulate(const std::vector<Vec3>& polygon);
+
+}  // namespace mpath

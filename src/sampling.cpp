@@ -1,0 +1,89 @@
+#include "sampling.h"
+
+#include <numbers>
+
+namespace mpath {
+
+Rng make_rng(unsigned long long seed, unsigned purpose, unsigned long long shard) {
+  // pcg's stream selector takes 63 bits; mix purpose and shard into it.
+  const unsigned long long stream = (static_cast<unsigned long long>(purpose) << 40) ^ shard;
+  return Rng(seed, stream);
+}
+
+Vec3 cosine_direction(const Vec3& n, Rng& rng) {
+  const double u1 = uniform(rng), u2 = uniform(rng);
+  const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
+  Vec3 t, b;
+  orthonormal_basis(n, t, b);
+  return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0, 1.0 - u1));
+}
+
+namespace {
+Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, Rng& rng) {
+  double u = uniform(rng), v = uniform(rng);
+  if (u + v > 1) {
+    u = 1 - u;
+    v = 1 - v;
+  }
+  return a + (b - a) * u + (c - a) * v;
+}
+}  // namespace
+
+Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, Rng& rng) {
+  const Vec3& v0 = mesh.vertices[p.v[0]];
+  const Vec3& v1 = mesh.vertices[p.v[1]];
+  const Vec3& v2 = mesh.vertices[p.v[2]];
+  if (p.is_triangle()) return triangle_point(v0, v1, v2, rng);
+  const Vec3& v3 = mesh.vertices[p.v[3]];
+  const double a1 = 0.5 * length(cross(v1 - v0, v3 - v0));
+  const double a2 = 0.5 * length(cross(v3 - v2, v1 - v2));
+  if (uniform(rng) * (a1 + a2) < a1) return triangle_point(v0, v1, v3, rng);
+  return triangle_point(v2, v3, v1, rng);
+}
+
+Bounds line_box(const Bounds& b) {
+  Bounds out = b;
+  const double margin = 1e-3 * std::max(b.diagonal(), 1e-30);
+  for (int i = 0; i < 3; ++i) {
+    out.lo[i] -= margin;
+    out.hi[i] += margin;
+  }
+  return out;
+}
+
+BoxLineSampler::BoxLineSampler(const Bounds& box) : box_(box) {
+  const Vec3 s = box.size();
+  const double areas[3] = {s.y * s.z, s.z * s.x, s.x * s.y};
+  double sum = 0;
+  for (int f = 0; f < 6; ++f) {
+    sum += areas[f / 2];
+    face_cdf_[f] = sum;
+  }
+  for (double& c : face_cdf_) c /= sum;
+  hair_ = 1e-6 * box.diagonal();
+}
+
+GlobalLine BoxLineSampler::sample(Rng& rng) const {
+  const double pick = uniform(rng);
+  int face = 0;
+  while (face < 5 && pick >= face_cdf_[face]) ++face;
+  const int axis = face / 2;
+  const bool high = face % 2 == 1;
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  Vec3 p;
+  p[axis] = high ? box_.hi[axis] : box_.lo[axis];
+  p[u] = box_.lo[u] + uniform(rng) * (box_.hi[u] - box_.lo[u]);
+  p[v] = box_.lo[v] + uniform(rng) * (box_.hi[v] - box_.lo[v]);
+  Vec3 inward;
+  inward[axis] = high ? -1.0 : 1.0;
+  const Vec3 dir = cosine_direction(inward, rng);
+  // Distance to the far wall (slab exit).
+  double exit = INFINITY;
+  for (int i = 0; i < 3; ++i) {
+    if (dir[i] > 0) exit = std::min(exit, (box_.hi[i] - p[i]) / dir[i]);
+    else if (dir[i] < 0) exit = std::min(exit, (box_.lo[i] - p[i]) / dir[i]);
+  }
+  return {p - dir * hair_, dir, exit + 2.0 * hair_};
+}
+
+}  // namespace mpath

@@ -1,0 +1,138 @@
+#include "tracer.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "error.h"
+
+namespace mpath {
+namespace {
+
+// The intersect context of an all-hits query: Embree hands it to the filter.
+struct CollectContext {
+  RTCIntersectContext context;
+  std::vector<LineHit>* hits;
+};
+
+void collect_filter(const RTCFilterFunctionNArguments* args) {
+  auto* ctx = reinterpret_cast<CollectContext*>(args->context);
+  const float t = RTCRayN_tfar(args->ray, args->N, 0);
+  const unsigned prim = RTCHitN_primID(args->hit, args->N, 0);
+  ctx->hits->push_back({static_cast<double>(t), static_cast<int>(prim)});
+  args->valid[0] = 0;  // reject, so traversal goes on to the next hit
+}
+
+void embree_error(void*, RTCError code, const char* message) {
+  if (code != RTC_ERROR_NONE) fmt::print(stderr, "mpath: embree error {}: {}\n", static_cast<int>(code), message ? message : "");
+}
+
+void init_ray(RTCRayHit& rh, const Vec3& org, const Vec3& dir, double tnear, double tfar) {
+  rh.ray.org_x = static_cast<float>(org.x);
+  rh.ray.org_y = static_cast<float>(org.y);
+  rh.ray.org_z = static_cast<float>(org.z);
+  rh.ray.dir_x = static_cast<float>(dir.x);
+  rh.ray.dir_y = static_cast<float>(dir.y);
+  rh.ray.dir_z = static_cast<float>(dir.z);
+  rh.ray.tnear = static_cast<float>(tnear);
+  rh.ray.tfar = static_cast<float>(tfar);
+  rh.ray.time = 0;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+}
+
+}  // namespace
+
+Tracer::Tracer(const PatchMesh& mesh) : mesh_(mesh) {
+  device_ = rtcNewDevice("verbose=0");
+  MPATH_CHECK(device_ != nullptr, "rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
+  rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
+  scene_ = rtcNewScene(device_);
+  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+
+  RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_QUAD);
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), mesh.vertices.size()));
+  for (size_t i = 0; i < mesh.vertices.size(); ++i)
+    for (int k = 0; k < 3; ++k) vb[3 * i + k] = static_cast<float>(mesh.vertices[i][k]);
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
+                                                            4 * sizeof(unsigned), mesh.patches.size()));
+  for (size_t i = 0; i < mesh.patches.size(); ++i)
+    for (int k = 0; k < 4; ++k) ib[4 * i + k] = mesh.patches[i].v[k];
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(scene_, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(scene_);
+  MPATH_CHECK(rtcGetDeviceError(device_) == RTC_ERROR_NONE, "embree scene build failed");
+  tie_epsilon_ = 1e-7 * std::max(mesh.bounds.diagonal(), 1e-30);
+}
+
+Tracer::~Tracer() {
+  if (scene_) rtcReleaseScene(scene_);
+  if (device_) rtcReleaseDevice(device_);
+}
+
+std::string Tracer::embree_version() {
+  return fmt::format("{}.{}.{}", RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH);
+}
+
+NearestHit Tracer::nearest(const Vec3& org, const Vec3& dir, double tnear, double tfar) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh;
+  init_ray(rh, org, dir, tnear, tfar);
+  rtcIntersect1(scene_, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
+  const int patch = static_cast<int>(rh.hit.primID);
+  return {patch, plane_distance(patch, org, dir, rh.ray.tfar)};
+}
+
+double Tracer::plane_distance(int patch, const Vec3& org, const Vec3& dir, double fallback) const {
+  const Patch& p = mesh_.patches[patch];
+  const double denom = dot(p.normal, dir);
+  if (std::fabs(denom) < 1e-12) return fallback;
+  return dot(p.normal, mesh_.vertices[p.v[0]] - org) / denom;
+}
+
+void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector<LineHit>& out) const {
+  out.clear();
+  CollectContext ctx;
+  rtcInitIntersectContext(&ctx.context);
+  ctx.context.filter = collect_filter;
+  ctx.hits = &out;
+  RTCRayHit rh;
+  init_ray(rh, org, dir, 0.0, tfar);
+  rtcIntersect1(scene_, &ctx.context, &rh);
+  for (LineHit& h : out) h.t = plane_distance(h.patch, org, dir, h.t);
+  // Few hits per line: insertion sort beats std::sort here.
+  for (size_t i = 1; i < out.size(); ++i) {
+    const LineHit h = out[i];
+    size_t j = i;
+    while (j > 0 && (out[j - 1].t > h.t || (out[j - 1].t == h.t && out[j - 1].patch > h.patch))) {
+      out[j] = out[j - 1];
+      --j;
+    }
+    out[j] = h;
+  }
+  // The same patch twice (a quad's diagonal), or coplanar patches facing the
+  // same way at one distance (a shared edge): one crossing.
+  size_t kept = 0;
+  for (size_t i = 0; i < out.size(); ++i) {
+    bool duplicate = false;
+    for (size_t j = kept; j-- > 0 && out[i].t - out[j].t <= tie_epsilon_;) {
+      const Patch& a = mesh_.patches[out[i].patch];
+      const Patch& b = mesh_.patches[out[j].patch];
+      if (out[i].patch == out[j].patch || dot(a.normal, b.normal) > 1.0 - 1e-9) {
+        duplicate = true;
+        break;
+      }
+    }
+    if (!duplicate) out[kept++] = out[i];
+  }
+  out.resize(kept);
+}
+
+}  // namespace mpath

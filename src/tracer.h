@@ -1,0 +1,51 @@
+// Ray casting with Embree 3 over the patch mesh: nearest hits for local lines
+// and camera rays, and every hit along a global line (an intersection filter
+// collects them; distances are recomputed in double from the patch planes).
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <string>
+#include <vector>
+
+#include "mesh.h"
+
+namespace mpath {
+
+struct LineHit {
+  double t;
+  int patch;
+};
+
+struct NearestHit {
+  int patch = -1;  // -1: the ray left the scene
+  double t = 0;
+};
+
+class Tracer {
+ public:
+  explicit Tracer(const PatchMesh& mesh);
+  ~Tracer();
+  Tracer(const Tracer&) = delete;
+  Tracer& operator=(const Tracer&) = delete;
+
+  NearestHit nearest(const Vec3& org, const Vec3& dir, double tnear, double tfar) const;
+
+  // Every patch crossed by org + t dir, t in [0, tfar], sorted by distance,
+  // with crossings repeated on shared edges of coplanar patches removed.
+  // `scratch` is reused between calls to avoid allocation.
+  void all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector<LineHit>& out) const;
+
+  // Distance along the ray to the plane of `patch`, in double precision.
+  double plane_distance(int patch, const Vec3& org, const Vec3& dir, double fallback) const;
+
+  static std::string embree_version();
+
+ private:
+  const PatchMesh& mesh_;
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  double tie_epsilon_ = 0;
+};
+
+}  // namespace mpath
