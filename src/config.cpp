@@ -197,6 +197,7 @@ const std::map<std::string, Setter>& setters() {
       {"store.dir", [](auto& n, auto& s, Options& o) { o.store.dir = get_path(n, s); }},
       {"output.dir", [](auto& n, auto& s, Options& o) { o.output.dir = get_path(n, s); }},
       {"output.exr", [](auto& n, auto& s, Options& o) { o.output.exr = get_bool(n, s); }},
+      {"output.png", [](auto& n, auto& s, Options& o) { o.output.png = get_bool(n, s); }},
       {"camera",
        [](auto& n, auto& s, Options& o) {
          o.cameras.clear();
@@ -301,7 +302,7 @@ toml::table options_table(const Options& o) {
       {"solver", toml::table{{"method", o.solver.method}, {"iterations", o.solver.iterations},
                              {"tolerance", o.solver.tolerance}, {"threads", o.solver.threads}}},
       {"store", toml::table{{"dir", o.store.dir.string()}}},
-      {"output", toml::table{{"dir", o.output.dir.string()}, {"exr", o.output.exr}}},
+      {"output", toml::table{{"dir", o.output.dir.string()}, {"exr", o.output.exr}, {"png", o.output.png}}},
   };
   if (!cameras.empty()) t.insert("camera", cameras);
   return t;

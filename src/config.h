@@ -73,7 +73,8 @@ struct Options {
 
   struct Output {
     std::filesystem::path dir = "results";
-    bool exr = true;
+    bool exr = true;  // an EXR per camera
+    bool png = true;  // and a tone-mapped PNG preview beside it
   } output;
 
   std::vector<CameraOptions> cameras;

@@ -1,0 +1,41 @@
+// Classic Multipath: after the first shot, passes of fresh uniform global
+// lines over the scene box, traced on the fly; crossing counts are forecast
+// (N lines cross a face of area A about N 2A/S times, S the box's area) and
+// what a face was due to send but no line took stays unshot for the next pass.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "config.h"
+#include "radiosity_state.h"
+#include "tracer.h"
+
+namespace mpath {
+
+struct PassStats {
+  int pass = 0;
+  uint64_t lines = 0;
+  uint64_t hits = 0;
+  double seconds = 0;
+  double unshot_fraction = 0;  // unshot / emitted after the pass
+};
+
+struct IterationLog {
+  std::vector<PassStats> passes;
+  uint64_t lines = 0;
+  uint64_t hits = 0;
+  bool converged = false;
+};
+
+// Runs passes until unshot / emitted < solver.tolerance or solver.iterations
+// passes. Pass k casts lines.total * U_k / U_1 lines (at least a floor), so
+// lines follow the power left to distribute.
+IterationLog solve_classic(const Options& options, const PatchMesh& mesh, const Tracer& tracer,
+                           RadiosityState& state, int shards);
+
+// One pass of `lines` fresh global lines; exposed for tests and benchmarks.
+PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, uint64_t lines,
+                       unsigned long long seed, unsigned pass, int shards);
+
+}  // namespace mpath

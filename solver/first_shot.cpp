@@ -1,0 +1,111 @@
+#include "first_shot.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "progress.h"
+#include "sampling.h"
+#include "transport.h"
+
+namespace mpath {
+namespace {
+
+constexpr unsigned kFirstShotStream = 1;
+
+// Lines per emitting face, proportional to its power, at least one each; the
+// counts are cumulative roundings so they add up to the budget (plus the minimums).
+std::vector<uint64_t> allocate_lines(const RadiosityState& s, long long budget, std::vector<int>& emitters) {
+  std::vector<double> power;
+  double total = 0;
+  for (size_t f = 0; f < s.faces; ++f) {
+    double p = 0;
+    for (int c = 0; c < s.channels; ++c) p += s.emitted_power[s.at(f, c)];
+    if (p > 0) {
+      emitters.push_back(static_cast<int>(f));
+      power.push_back(p);
+      total += p;
+    }
+  }
+  std::vector<uint64_t> counts(emitters.size());
+  double cumulative = 0;
+  uint64_t assigned = 0;
+  for (size_t i = 0; i < emitters.size(); ++i) {
+    cumulative += power[i];
+    const auto upto = static_cast<uint64_t>(std::llround(static_cast<double>(budget) * cumulative / total));
+    counts[i] = std::max<uint64_t>(1, upto > assigned ? upto - assigned : 0);
+    assigned = std::max(assigned, upto);
+  }
+  return counts;
+}
+
+}  // namespace
+
+FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long budget,
+                          unsigned long long seed, int shards) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<int> emitters;
+  const std::vector<uint64_t> counts = allocate_lines(state, budget, emitters);
+  std::vector<uint64_t> first(counts.size() + 1, 0);  // first line of each emitter
+  for (size_t i = 0; i < counts.size(); ++i) first[i + 1] = first[i] + counts[i];
+  const uint64_t total = first.back();
+
+  const int ch = state.channels;
+  const double tnear = 1e-6 * mesh.bounds.diagonal();
+  const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
+  std::vector<ShardAccumulator> acc(shards);
+  Progress progress("first shot", total, "lines", true);
+  tbb::parallel_for(0, shards, [&](int s) {
+    ShardAccumulator& a = acc[s];
+    a.reset(state.faces, ch);
+    Rng rng = make_rng(seed, kFirstShotStream, static_cast<unsigned long long>(s));
+    const uint64_t lo = total * s / shards, hi = total * (s + 1) / shards;
+    size_t e = std::upper_bound(first.begin(), first.end(), lo) - first.begin() - 1;
+    uint64_t since_report = 0;
+    for (uint64_t line = lo; line < hi; ++line) {
+      while (line >= first[e + 1]) ++e;
+      const int face = emitters[e];
+      const Patch& patch = mesh.patches[mesh.face_patch[face]];
+      double power[3];
+      for (int c = 0; c < ch; ++c) power[c] = state.emitted_power[state.at(face, c)] / static_cast<double>(counts[e]);
+      const Vec3 n = mesh.face_normal(face);
+      const Vec3 org = uniform_point(mesh, patch, rng);
+      const Vec3 dir = cosine_direction(n, rng);
+      const NearestHit hit = tracer.nearest(org, dir, tnear, tfar);
+      if (hit.patch < 0) {
+        for (int c = 0; c < ch; ++c) a.escaped[c] += power[c];
+      } else {
+        const Patch& target = mesh.patches[hit.patch];
+        receive(state, dot(target.normal, dir) < 0 ? target.face[0] : target.face[1], power, a);
+      }
+      ++a.lines;
+      if (++since_report == 4096) {
+        progress.advance(since_report);
+        since_report = 0;
+      }
+    }
+    progress.advance(since_report);
+  });
+  progress.finish();
+
+  // Merge in shard order: the result does not depend on scheduling.
+  for (const ShardAccumulator& a : acc) {
+    for (size_t i = 0; i < state.phi.size(); ++i) {
+      state.phi[i] += a.phi_gain[i];
+      state.unshot[i] += a.gathered[i];
+    }
+    for (int c = 0; c < ch; ++c) {
+      state.energy.absorbed[c] += a.absorbed[c];
+      state.energy.escaped[c] += a.escaped[c];
+    }
+  }
+  FirstShotStats stats;
+  stats.lines = total;
+  stats.emitter_faces = emitters.size();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return stats;
+}
+
+}  // namespace mpath

@@ -1,0 +1,148 @@
+#include "render.h"
+
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFloatAttribute.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfStringAttribute.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "atomic_file.h"
+#include "error.h"
+#include "png_writer.h"
+#include "sampling.h"
+
+namespace mpath {
+
+VertexRadiosity::VertexRadiosity(const PatchMesh& mesh, const RadiosityState& state) : mesh_(mesh) {
+  const size_t nv = mesh.vertices.size();
+  values_.assign(2 * nv * 3, 0.0);
+  std::vector<double> weight(2 * nv, 0.0);
+  for (size_t f = 0; f < state.faces; ++f) {
+    const Patch& p = mesh.patches[mesh.face_patch[f]];
+    const int side = mesh.face_side[f];
+    const auto b = state.radiosity(mesh, f);
+    for (int k = 0; k < (p.is_triangle() ? 3 : 4); ++k) {
+      const size_t slot = side * nv + p.v[k];
+      for (int c = 0; c < 3; ++c) values_[slot * 3 + c] += p.area * b[c];
+      weight[slot] += p.area;
+    }
+  }
+  for (size_t slot = 0; slot < 2 * nv; ++slot)
+    if (weight[slot] > 0)
+      for (int c = 0; c < 3; ++c) values_[slot * 3 + c] /= weight[slot];
+}
+
+namespace {
+
+// Barycentric coordinates of p in triangle abc (in its plane).
+std::array<double, 3> barycentric(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& p) {
+  const Vec3 n = cross(b - a, c - a);
+  const double area2 = dot(n, n);
+  if (area2 <= 0) return {1.0 / 3, 1.0 / 3, 1.0 / 3};
+  const double u = dot(cross(c - b, p - b), n) / area2;
+  const double v = dot(cross(a - c, p - c), n) / area2;
+  return {u, v, 1.0 - u - v};
+}
+
+}  // namespace
+
+std::array<double, 3> VertexRadiosity::at(int patch, int side, const Vec3& p) const {
+  const Patch& q = mesh_.patches[patch];
+  const size_t nv = mesh_.vertices.size();
+  std::array<uint32_t, 3> tri{q.v[0], q.v[1], q.v[2]};
+  auto w = barycentric(mesh_.vertices[tri[0]], mesh_.vertices[tri[1]], mesh_.vertices[tri[2]], p);
+  if (!q.is_triangle() && std::min({w[0], w[1], w[2]}) < 0) {
+    tri = {q.v[0], q.v[2], q.v[3]};
+    w = barycentric(mesh_.vertices[tri[0]], mesh_.vertices[tri[1]], mesh_.vertices[tri[2]], p);
+  }
+  std::array<double, 3> out{};
+  for (int k = 0; k < 3; ++k) {
+    const double wk = std::clamp(w[k], 0.0, 1.0);
+    for (int c = 0; c < 3; ++c) out[c] += wk * values_[(side * nv + tri[k]) * 3 + c];
+  }
+  return out;
+}
+
+Image render_camera(const CameraOptions& cam, const PatchMesh& mesh, const Tracer& tracer,
+                    const VertexRadiosity& radiosity, unsigned long long seed) {
+  Image image{cam.width, cam.height, std::vector<float>(static_cast<size_t>(cam.width) * cam.height * 3, 0.0f)};
+  const Vec3 forward = normalize(cam.look_at - cam.position);
+  const Vec3 right = normalize(cross(forward, cam.up));
+  const Vec3 up = cross(right, forward);
+  const double half_h = std::tan(0.5 * cam.fov_deg * std::numbers::pi / 180.0);
+  const double half_w = half_h * cam.width / cam.height;
+  const double tfar = 1e3 * (mesh.bounds.diagonal() + length(cam.position - mesh.bounds.center()));
+  tbb::parallel_for(0, cam.height, [&](int y) {
+    Rng rng = make_rng(seed, 3, static_cast<unsigned long long>(y));
+    for (int x = 0; x < cam.width; ++x) {
+      std::array<double, 3> sum{};
+      for (int s = 0; s < cam.samples; ++s) {
+        const double sx = (x + (cam.samples > 1 ? uniform(rng) : 0.5)) / cam.width * 2.0 - 1.0;
+        const double sy = 1.0 - (y + (cam.samples > 1 ? uniform(rng) : 0.5)) / cam.height * 2.0;
+        const Vec3 dir = normalize(forward + right * (sx * half_w) + up * (sy * half_h));
+        const NearestHit hit = tracer.nearest(cam.position, dir, 0.0, tfar);
+        if (hit.patch < 0) continue;
+        const Patch& p = mesh.patches[hit.patch];
+        const int side = dot(p.normal, dir) < 0 ? 0 : 1;
+        if (p.face[side] < 0) continue;  // the black back of a one-sided patch
+        const auto b = radiosity.at(hit.patch, side, cam.position + dir * hit.t);
+        for (int c = 0; c < 3; ++c) sum[c] += b[c];
+      }
+      for (int c = 0; c < 3; ++c)
+        image.rgb[(static_cast<size_t>(y) * cam.width + x) * 3 + c] =
+            static_cast<float>(sum[c] / (cam.samples * std::numbers::pi));
+    }
+  });
+  return image;
+}
+
+void write_exr(const std::filesystem::path& path, const Image& image, double exposure,
+               const std::map<std::string, std::string>& metadata) {
+  const float scale = static_cast<float>(std::exp2(exposure));
+  std::vector<float> pixels(image.rgb.size());
+  for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = image.rgb[i] * scale;
+  const auto temp = temporary_path(path);
+  try {
+    Imf::Header header(image.width, image.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const char* name : {"R", "G", "B"}) header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    header.insert("exposure", Imf::FloatAttribute(static_cast<float>(exposure)));
+    for (const auto& [key, value] : metadata) header.insert(key, Imf::StringAttribute(value));
+    Imf::OutputFile file(temp.c_str(), header);
+    Imf::FrameBuffer fb;
+    const size_t xs = 3 * sizeof(float), ys = xs * image.width;
+    char* base = reinterpret_cast<char*>(pixels.data());
+    fb.insert("R", Imf::Slice(Imf::FLOAT, base, xs, ys));
+    fb.insert("G", Imf::Slice(Imf::FLOAT, base + sizeof(float), xs, ys));
+    fb.insert("B", Imf::Slice(Imf::FLOAT, base + 2 * sizeof(float), xs, ys));
+    file.setFrameBuffer(fb);
+    file.writePixels(image.height);
+  } catch (const std::exception& e) {
+    std::error_code ec;
+    std::filesystem::remove(temp, ec);
+    throw InputError(fmt::format("{}: writing the EXR image failed: {}", path.string(), e.what()));
+  }
+  commit_temporary(temp, path);
+}
+
+}  // namespace mpath
+
+namespace mpath {
+
+void write_png(const std::filesystem::path& path, const Image& image, double exposure) {
+  const double scale = std::exp2(exposure);
+  std::vector<uint8_t> bytes(image.rgb.size());
+  for (size_t i = 0; i < bytes.size(); ++i) {
+    const double v = std::clamp(image.rgb[i] * scale, 0.0, 1.0);
+    const double srgb = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+    bytes[i] = static_cast<uint8_t>(std::lround(255.0 * srgb));
+  }
+  write_png_rgb8(path, image.width, image.height, bytes);
+}
+
+}  // namespace mpath

@@ -1,0 +1,146 @@
+#include "solve.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <nlohmann/json.hpp>
+
+#include "atomic_file.h"
+#include "classic.h"
+#include "error.h"
+#include "first_shot.h"
+#include "mpath_version.h"
+#include "prepared_scene.h"
+#include "render.h"
+#include "solution_ply.h"
+
+namespace mpath {
+namespace {
+
+using clock = std::chrono::steady_clock;
+using json = nlohmann::json;
+
+double seconds_since(clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); }
+
+json energy_json(const RadiosityState& s) {
+  const auto absorbed = s.rgb(s.energy.absorbed), escaped = s.rgb(s.energy.escaped), emitted = s.rgb(s.energy.emitted);
+  std::array<double, 3> unshot{};
+  for (size_t f = 0; f < s.faces; ++f)
+    for (int c = 0; c < s.channels; ++c) unshot[c] += s.unshot[s.at(f, c)];
+  const auto unshot_rgb = s.rgb(unshot);
+  auto sum = [](const std::array<double, 3>& v) { return v[0] + v[1] + v[2]; };
+  const double residual = sum(emitted) - sum(absorbed) - sum(escaped) - sum(unshot_rgb);
+  return {{"emitted", sum(emitted)},
+          {"absorbed", sum(absorbed)},
+          {"escaped", sum(escaped)},
+          {"unshot", sum(unshot_rgb)},
+          {"in_transit", 0.0},
+          {"residual", residual},
+          {"relative_residual", sum(emitted) > 0 ? residual / sum(emitted) : 0.0},
+          {"per_channel", {{"emitted", emitted}, {"absorbed", absorbed}, {"escaped", escaped}, {"unshot", unshot_rgb}}}};
+}
+
+void write_json(const std::filesystem::path& path, const json& j) {
+  AtomicFile file(path);
+  file.stream() << j.dump(2) << "\n";
+  file.commit();
+}
+
+}  // namespace
+
+void run_solve(const Options& options, const SolveFlags& flags) {
+  const auto start = clock::now();
+  if (options.solver.method != "classic")
+    throw InputError(fmt::format("config key 'solver.method': '{}' solves from the line store of mpath-preprocess, "
+                                 "which this version does not read yet; use solver.method=classic",
+                                 options.solver.method));
+  if (flags.resume)
+    throw InputError("--resume: solver.method=classic keeps no checkpoints (it traces fresh lines); run it without --resume");
+
+  const int threads = effective_threads(options);
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  spdlog::info("mpath-solve {} ({}), method {}, {} thread(s)", MPATH_VERSION, MPATH_GIT_COMMIT, options.solver.method, threads);
+
+  PreparedScene prepared = prepare_scene(options);
+  const PatchMesh& mesh = prepared.mesh;
+  if (flags.dry_run) {
+    spdlog::info("dry run: config and scene are valid; nothing solved");
+    return;
+  }
+  std::filesystem::create_directories(options.output.dir);
+
+  auto t = clock::now();
+  const Tracer tracer(mesh);
+  const double bvh_seconds = seconds_since(t);
+
+  RadiosityState state = make_state(prepared.scene, mesh);
+  spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
+  const FirstShotStats shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, threads);
+  t = clock::now();
+  const IterationLog iterations = solve_classic(options, mesh, tracer, state, threads);
+  const double iteration_seconds = seconds_since(t);
+  const double relative_residual = state.energy_residual() / state.emitted_total();
+  spdlog::info("energy: unshot {:.3e} of emitted, balance residual {:.2e} (relative)",
+               state.unshot_total() / state.emitted_total(), relative_residual);
+  if (!iterations.converged)
+    spdlog::warn("stopped at solver.iterations = {} with unshot {:.3e} of emitted above solver.tolerance {}",
+                 options.solver.iterations, state.unshot_total() / state.emitted_total(), options.solver.tolerance);
+
+  t = clock::now();
+  json outputs = json::array();
+  write_solution_ply(options.output.dir / "solution.ply", mesh, state);
+  outputs.push_back("solution.ply");
+  if (!options.cameras.empty() && (options.output.exr || options.output.png)) {
+    const VertexRadiosity vertex_radiosity(mesh, state);
+    for (const CameraOptions& cam : options.cameras) {
+      const Image image = render_camera(cam, mesh, tracer, vertex_radiosity, options.lines.seed);
+      if (options.output.exr) {
+        write_exr(options.output.dir / (cam.name + ".exr"), image, cam.exposure,
+                  {{"mpathVersion", MPATH_VERSION},
+                   {"mpathCommit", MPATH_GIT_COMMIT},
+                   {"mpathMethod", options.solver.method},
+                   {"mpathScene", options.scene.file.string()},
+                   {"mpathUnits", "radiance W/sr/m2 times 2^exposure"},
+                   {"mpathConfig", options_to_json(options)}});
+        outputs.push_back(cam.name + ".exr");
+      }
+      if (options.output.png) {
+        write_png(options.output.dir / (cam.name + ".png"), image, cam.exposure);
+        outputs.push_back(cam.name + ".png");
+      }
+    }
+  }
+  const double output_seconds = seconds_since(t);
+
+  json passes = json::array();
+  for (const PassStats& p : iterations.passes)
+    passes.push_back({{"pass", p.pass}, {"lines", p.lines}, {"hits", p.hits}, {"seconds", p.seconds},
+                      {"unshot_fraction", p.unshot_fraction}});
+  const PatchMesh& m = mesh;
+  json report = {
+      {"mpath", {{"version", MPATH_VERSION}, {"commit", MPATH_GIT_COMMIT}, {"embree", Tracer::embree_version()},
+                 {"command", flags.command_line}, {"threads", threads}}},
+      {"config", json::parse(options_to_json(options))},
+      {"scene", {{"file", options.scene.file.string()}, {"polygons", prepared.scene.polygons.size()},
+                 {"objects", prepared.scene.objects.size()}, {"materials", prepared.scene.materials.size()},
+                 {"dropped_polygons", m.dropped_polygons}, {"patches", m.patches.size()}, {"faces", m.face_count()},
+                 {"max_patch_area", m.max_patch_area}, {"channels", state.channels}}},
+      {"timings", {{"load", prepared.load_seconds}, {"mesh", prepared.mesh_seconds}, {"bvh", bvh_seconds},
+                   {"first_shot", shot.seconds}, {"iterations", iteration_seconds}, {"outputs", output_seconds},
+                   {"total", seconds_since(start)}}},
+      {"first_shot", {{"lines", shot.lines}, {"emitter_faces", shot.emitter_faces}}},
+      {"lines", {{"global", iterations.lines}, {"hits", iterations.hits}, {"local", shot.lines}}},
+      {"iterations", {{"count", iterations.passes.size()}, {"converged", iterations.converged},
+                      {"tolerance", options.solver.tolerance}, {"cap", options.solver.iterations},
+                      {"unshot_fraction", state.unshot_total() / state.emitted_total()}, {"passes", passes}}},
+      {"memory", {{"peak_rss_bytes", peak_rss_bytes()}}},
+      {"energy", energy_json(state)},
+      {"outputs", outputs},
+      {"warnings", prepared.warnings},
+  };
+  write_json(options.output.dir / "report.json", report);
+  spdlog::info("results in {} ({:.2f} s in all)", options.output.dir.string(), seconds_since(start));
+}
+
+}  // namespace mpath

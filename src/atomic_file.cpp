@@ -1,0 +1,63 @@
+#include "atomic_file.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include "error.h"
+
+namespace mpath {
+
+namespace fs = std::filesystem;
+
+fs::path temporary_path(const fs::path& final_path) {
+  return final_path.parent_path() / fmt::format(".{}.tmp.{}", final_path.filename().string(), getpid());
+}
+
+void commit_temporary(const fs::path& temp, const fs::path& final_path) {
+  std::error_code ec;
+  fs::rename(temp, final_path, ec);
+  if (ec) {
+    fs::remove(temp, ec);
+    throw InputError(fmt::format("{}: cannot move finished file into place: {}", final_path.string(), ec.message()));
+  }
+}
+
+AtomicFile::AtomicFile(const fs::path& final_path) : final_(final_path), temp_(temporary_path(final_path)) {
+  out_.open(temp_, std::ios::binary | std::ios::trunc);
+  if (!out_) throw InputError(fmt::format("{}: cannot create file: {}", temp_.string(), std::strerror(errno)));
+}
+
+AtomicFile::~AtomicFile() {
+  if (!committed_) {
+    out_.close();
+    std::error_code ec;
+    fs::remove(temp_, ec);
+  }
+}
+
+void AtomicFile::commit() {
+  out_.flush();
+  const bool ok = out_.good();
+  const int err = errno;
+  out_.close();
+  if (!ok || out_.fail()) {
+    std::error_code ec;
+    fs::remove(temp_, ec);
+    committed_ = true;
+    throw InputError(fmt::format("{}: writing failed ({}); nothing was written under that name", final_.string(),
+                                 err ? std::strerror(err) : "stream error"));
+  }
+  commit_temporary(temp_, final_);
+  committed_ = true;
+}
+
+size_t peak_rss_bytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<size_t>(usage.ru_maxrss) * 1024;
+}
+
+}  // namespace mpath

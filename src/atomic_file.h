@@ -1,0 +1,37 @@
+// Files that appear under their final name only when complete: written to a
+// temporary name beside the target, checked, then renamed.
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+
+namespace mpath {
+
+class AtomicFile {
+ public:
+  explicit AtomicFile(const std::filesystem::path& final_path);
+  ~AtomicFile();  // removes the temporary file unless committed
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  std::ofstream& stream() { return out_; }
+  const std::filesystem::path& temp_path() const { return temp_; }
+  // Flushes and renames; throws InputError naming the file if writing failed
+  // (a full disk, say).
+  void commit();
+
+ private:
+  std::filesystem::path final_, temp_;
+  std::ofstream out_;
+  bool committed_ = false;
+};
+
+// Temporary name beside `final_path` for writers that need a path (EXR).
+std::filesystem::path temporary_path(const std::filesystem::path& final_path);
+// Renames a finished temporary file onto its final name, or throws.
+void commit_temporary(const std::filesystem::path& temp, const std::filesystem::path& final_path);
+
+// Peak resident memory of this process, bytes.
+size_t peak_rss_bytes();
+
+}  // namespace mpath
