@@ -42,7 +42,8 @@ void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, 
 }  // namespace
 
 PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, uint64_t lines,
-                       unsigned long long seed, unsigned pass, int shards) {
+                       unsigned long long seed, unsigned pass, int shards, const std::string& sequence) {
+  const LineSequence points(sequence, seed, pass);
   const auto start = std::chrono::steady_clock::now();
   const BoxLineSampler sampler(line_box(mesh.bounds));
   PassInputs in;
@@ -68,7 +69,9 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
     std::vector<LineHit> hits;
     uint64_t since_report = 0;
     for (uint64_t i = lo; i < hi; ++i) {
-      const GlobalLine line = sampler.sample(rng);
+      double u[4];
+      points.point(i, rng, u);
+      const GlobalLine line = sampler.sample(u);
       tracer.all_hits(line.org, line.dir, line.length, hits);
       order_ties(mesh, line.dir, tie_epsilon, hits);
       transport_line(in, line.dir, hits, a);
@@ -107,7 +110,8 @@ IterationLog solve_classic(const Options& options, const PatchMesh& mesh, const 
     }
     const double share = first_unshot > 0 ? unshot / first_unshot : 1.0;
     const auto lines = std::max(floor_lines, static_cast<uint64_t>(std::ceil(static_cast<double>(options.lines.total) * share)));
-    const PassStats p = classic_pass(mesh, tracer, state, lines, options.lines.seed, static_cast<unsigned>(pass), shards);
+    const PassStats p = classic_pass(mesh, tracer, state, lines, options.lines.seed, static_cast<unsigned>(pass), shards,
+                                     options.lines.sequence);
     spdlog::info("pass {}: {} lines, {} hits, {:.2f} s, unshot {:.3e} of emitted", p.pass, p.lines, p.hits, p.seconds,
                  p.unshot_fraction);
     log.passes.push_back(p);

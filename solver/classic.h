@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "config.h"
@@ -36,6 +37,7 @@ IterationLog solve_classic(const Options& options, const PatchMesh& mesh, const 
 
 // One pass of `lines` fresh global lines; exposed for tests and benchmarks.
 PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, uint64_t lines,
-                       unsigned long long seed, unsigned pass, int shards);
+                       unsigned long long seed, unsigned pass, int shards,
+                       const std::string& sequence = "random");
 
 }  // namespace mpath

@@ -15,19 +15,20 @@ namespace {
 
 constexpr unsigned kFirstShotStream = 1;
 
+double face_power(const RadiosityState& s, int f) {
+  double p = 0;
+  for (int c = 0; c < s.channels; ++c) p += s.emitted_power[s.at(f, c)];
+  return p;
+}
+
 // Lines per emitting face, proportional to its power, at least one each; the
 // counts are cumulative roundings so they add up to the budget (plus the minimums).
-std::vector<uint64_t> allocate_lines(const RadiosityState& s, long long budget, std::vector<int>& emitters) {
+std::vector<uint64_t> allocate_lines(const RadiosityState& s, long long budget, const std::vector<int>& emitters) {
   std::vector<double> power;
   double total = 0;
-  for (size_t f = 0; f < s.faces; ++f) {
-    double p = 0;
-    for (int c = 0; c < s.channels; ++c) p += s.emitted_power[s.at(f, c)];
-    if (p > 0) {
-      emitters.push_back(static_cast<int>(f));
-      power.push_back(p);
-      total += p;
-    }
+  for (int f : emitters) {
+    power.push_back(face_power(s, f));
+    total += power.back();
   }
   std::vector<uint64_t> counts(emitters.size());
   double cumulative = 0;
@@ -43,17 +44,40 @@ std::vector<uint64_t> allocate_lines(const RadiosityState& s, long long budget, 
 
 }  // namespace
 
+double classic_crossings_per_area(const Options& options, const PatchMesh& mesh) {
+  if (options.first_shot.mode != "auto") return 0.0;
+  return static_cast<double>(options.lines.total) * 2.0 / line_box(mesh.bounds).surface_area();
+}
+
 FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long budget,
-                          unsigned long long seed, int shards) {
+                          unsigned long long seed, int shards, double global_crossings_per_area) {
   const auto start = std::chrono::steady_clock::now();
+  FirstShotStats stats;
   std::vector<int> emitters;
-  const std::vector<uint64_t> counts = allocate_lines(state, budget, emitters);
+  for (size_t f = 0; f < state.faces; ++f)
+    if (face_power(state, static_cast<int>(f)) > 0) emitters.push_back(static_cast<int>(f));
+  std::vector<uint64_t> counts = allocate_lines(state, budget, emitters);
+  if (global_crossings_per_area > 0) {
+    std::vector<int> local;
+    for (size_t e = 0; e < emitters.size(); ++e) {
+      const int f = emitters[e];
+      if (global_crossings_per_area * mesh.face_area(f) >= static_cast<double>(counts[e])) {
+        for (int c = 0; c < state.channels; ++c) state.unshot[state.at(f, c)] += state.emitted_power[state.at(f, c)];
+        ++stats.global_emitter_faces;
+      } else {
+        local.push_back(f);
+      }
+    }
+    if (local.size() != emitters.size()) {
+      emitters = std::move(local);
+      counts = allocate_lines(state, budget, emitters);
+    }
+  }
   std::vector<uint64_t> first(counts.size() + 1, 0);  // first line of each emitter
   for (size_t i = 0; i < counts.size(); ++i) first[i + 1] = first[i] + counts[i];
   const uint64_t total = first.back();
 
   const int ch = state.channels;
-  const double tnear = 1e-6 * mesh.bounds.diagonal();
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   std::vector<ShardAccumulator> acc(shards);
   Progress progress("first shot", total, "lines", true);
@@ -73,7 +97,7 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
       const Vec3 n = mesh.face_normal(face);
       const Vec3 org = uniform_point(mesh, patch, rng);
       const Vec3 dir = cosine_direction(n, rng);
-      const NearestHit hit = tracer.nearest(org, dir, tnear, tfar);
+      const NearestHit hit = tracer.nearest_from(mesh.face_patch[face], org, dir, tfar);
       if (hit.patch < 0) {
         for (int c = 0; c < ch; ++c) a.escaped[c] += power[c];
       } else {
@@ -101,7 +125,6 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
       state.energy.escaped[c] += a.escaped[c];
     }
   }
-  FirstShotStats stats;
   stats.lines = total;
   stats.emitter_faces = emitters.size();
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

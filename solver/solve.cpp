@@ -13,6 +13,7 @@
 #include "mpath_version.h"
 #include "prepared_scene.h"
 #include "render.h"
+#include "sampling.h"
 #include "solution_ply.h"
 
 namespace mpath {
@@ -76,7 +77,9 @@ void run_solve(const Options& options, const SolveFlags& flags) {
 
   RadiosityState state = make_state(prepared.scene, mesh);
   spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
-  const FirstShotStats shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, threads);
+  const double crossings_per_area = classic_crossings_per_area(options, mesh);
+  const FirstShotStats shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, threads,
+                                         crossings_per_area);
   t = clock::now();
   const IterationLog iterations = solve_classic(options, mesh, tracer, state, threads);
   const double iteration_seconds = seconds_since(t);
@@ -129,7 +132,8 @@ void run_solve(const Options& options, const SolveFlags& flags) {
       {"timings", {{"load", prepared.load_seconds}, {"mesh", prepared.mesh_seconds}, {"bvh", bvh_seconds},
                    {"first_shot", shot.seconds}, {"iterations", iteration_seconds}, {"outputs", output_seconds},
                    {"total", seconds_since(start)}}},
-      {"first_shot", {{"lines", shot.lines}, {"emitter_faces", shot.emitter_faces}}},
+      {"first_shot", {{"lines", shot.lines}, {"emitter_faces", shot.emitter_faces},
+                      {"global_emitter_faces", shot.global_emitter_faces}}},
       {"lines", {{"global", iterations.lines}, {"hits", iterations.hits}, {"local", shot.lines}}},
       {"iterations", {{"count", iterations.passes.size()}, {"converged", iterations.converged},
                       {"tolerance", options.solver.tolerance}, {"cap", options.solver.iterations},

@@ -181,10 +181,17 @@ const std::map<std::string, Setter>& setters() {
       {"lines.sequence",
        [](auto& n, auto& s, Options& o) {
          o.lines.sequence = get_string(n, s);
-         if (o.lines.sequence != "random") bad_value(s, fmt::format("unknown sequence '{}' (known: random)", o.lines.sequence));
+         if (o.lines.sequence != "random" && o.lines.sequence != "halton")
+           bad_value(s, fmt::format("unknown sequence '{}' (known: random, halton)", o.lines.sequence));
        }},
       {"first_shot.lines", [](auto& n, auto& s, Options& o) { o.first_shot.lines = positive(get_integer(n, s), s); }},
       {"first_shot.accelerate", [](auto& n, auto& s, Options& o) { o.first_shot.accelerate = get_bool(n, s); }},
+      {"first_shot.mode",
+       [](auto& n, auto& s, Options& o) {
+         o.first_shot.mode = get_string(n, s);
+         if (o.first_shot.mode != "auto" && o.first_shot.mode != "local")
+           bad_value(s, fmt::format("unknown mode '{}' (known: auto, local)", o.first_shot.mode));
+       }},
       {"solver.method",
        [](auto& n, auto& s, Options& o) {
          o.solver.method = get_string(n, s);
@@ -298,7 +305,8 @@ toml::table options_table(const Options& o) {
                             {"seed", static_cast<int64_t>(o.lines.seed)},
                             {"sequence", o.lines.sequence}}},
       {"first_shot", toml::table{{"lines", static_cast<int64_t>(o.first_shot.lines)},
-                                 {"accelerate", o.first_shot.accelerate}}},
+                                 {"accelerate", o.first_shot.accelerate},
+                                 {"mode", o.first_shot.mode}}},
       {"solver", toml::table{{"method", o.solver.method}, {"iterations", o.solver.iterations},
                              {"tolerance", o.solver.tolerance}, {"threads", o.solver.threads}}},
       {"store", toml::table{{"dir", o.store.dir.string()}}},

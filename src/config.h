@@ -52,12 +52,16 @@ struct Options {
     long long total = 1'000'000;
     double root_fraction = 2.0 / 3.0;
     unsigned long long seed = 1;
-    std::string sequence = "random";
+    std::string sequence = "halton";  // "random" or "halton" (docs/algorithm.md)
   } lines;
 
   struct FirstShot {
     long long lines = 1'000'000;
     bool accelerate = true;
+    // "auto": an emitter face that the first pass of global lines crosses more
+    // often than it would get local lines is shot by the global lines;
+    // "local": every emitter face is shot with local lines.
+    std::string mode = "auto";
   } first_shot;
 
   struct Solver {

@@ -1,5 +1,6 @@
 #include "sampling.h"
 
+#include <algorithm>
 #include <numbers>
 
 namespace mpath {
@@ -12,6 +13,10 @@ Rng make_rng(unsigned long long seed, unsigned purpose, unsigned long long shard
 
 Vec3 cosine_direction(const Vec3& n, Rng& rng) {
   const double u1 = uniform(rng), u2 = uniform(rng);
+  return cosine_direction(n, u1, u2);
+}
+
+Vec3 cosine_direction(const Vec3& n, double u1, double u2) {
   const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
   Vec3 t, b;
   orthonormal_basis(n, t, b);
@@ -41,6 +46,34 @@ Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, Rng& rng) {
   return triangle_point(v2, v3, v1, rng);
 }
 
+double radical_inverse(uint64_t index, unsigned base) {
+  const double inv = 1.0 / base;
+  double f = inv, result = 0;
+  while (index > 0) {
+    result += f * static_cast<double>(index % base);
+    index /= base;
+    f *= inv;
+  }
+  return result;
+}
+
+LineSequence::LineSequence(const std::string& kind, unsigned long long seed, unsigned pass) : halton_(kind == "halton") {
+  Rng rng = make_rng(seed, 4, pass);
+  for (double& s : shift_) s = uniform(rng);
+}
+
+void LineSequence::point(uint64_t index, Rng& rng, double u[4]) const {
+  if (!halton_) {
+    for (int k = 0; k < 4; ++k) u[k] = uniform(rng);
+    return;
+  }
+  static constexpr unsigned kBases[4] = {2, 3, 5, 7};
+  for (int k = 0; k < 4; ++k) {
+    const double x = radical_inverse(index, kBases[k]) + shift_[k];
+    u[k] = x >= 1.0 ? x - 1.0 : x;
+  }
+}
+
 Bounds line_box(const Bounds& b) {
   Bounds out = b;
   const double margin = 1e-3 * std::max(b.diagonal(), 1e-30);
@@ -64,19 +97,25 @@ BoxLineSampler::BoxLineSampler(const Bounds& box) : box_(box) {
 }
 
 GlobalLine BoxLineSampler::sample(Rng& rng) const {
-  const double pick = uniform(rng);
+  const double u[4] = {uniform(rng), uniform(rng), uniform(rng), uniform(rng)};
+  return sample(u);
+}
+
+GlobalLine BoxLineSampler::sample(const double r[4]) const {
   int face = 0;
-  while (face < 5 && pick >= face_cdf_[face]) ++face;
+  while (face < 5 && r[0] >= face_cdf_[face]) ++face;
+  const double below = face > 0 ? face_cdf_[face - 1] : 0.0;
+  const double first = std::clamp((r[0] - below) / (face_cdf_[face] - below), 0.0, 1.0);
   const int axis = face / 2;
   const bool high = face % 2 == 1;
   const int u = (axis + 1) % 3, v = (axis + 2) % 3;
   Vec3 p;
   p[axis] = high ? box_.hi[axis] : box_.lo[axis];
-  p[u] = box_.lo[u] + uniform(rng) * (box_.hi[u] - box_.lo[u]);
-  p[v] = box_.lo[v] + uniform(rng) * (box_.hi[v] - box_.lo[v]);
+  p[u] = box_.lo[u] + first * (box_.hi[u] - box_.lo[u]);
+  p[v] = box_.lo[v] + r[1] * (box_.hi[v] - box_.lo[v]);
   Vec3 inward;
   inward[axis] = high ? -1.0 : 1.0;
-  const Vec3 dir = cosine_direction(inward, rng);
+  const Vec3 dir = cosine_direction(inward, r[2], r[3]);
   // Distance to the far wall (slab exit).
   double exit = INFINITY;
   for (int i = 0; i < 3; ++i) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <pcg_random.hpp>
+#include <string>
 
 #include "mesh.h"
 
@@ -16,6 +17,7 @@ inline double uniform(Rng& rng) { return std::ldexp(static_cast<double>(rng()), 
 
 // Cosine-distributed direction about unit normal n.
 Vec3 cosine_direction(const Vec3& n, Rng& rng);
+Vec3 cosine_direction(const Vec3& n, double u1, double u2);
 
 // Uniform point on a patch (a quad is split as Embree splits it).
 Vec3 uniform_point(const PatchMesh& mesh, const Patch& patch, Rng& rng);
@@ -32,6 +34,9 @@ class BoxLineSampler {
  public:
   explicit BoxLineSampler(const Bounds& box);
   GlobalLine sample(Rng& rng) const;
+  // The line of a point of [0,1)^4: u[0] picks the face and one coordinate on
+  // it, u[1] the other, u[2] and u[3] the cosine-distributed direction.
+  GlobalLine sample(const double u[4]) const;
   const Bounds& box() const { return box_; }
   double surface_area() const { return box_.surface_area(); }
 
@@ -40,6 +45,22 @@ class BoxLineSampler {
   double face_cdf_[6];
   double hair_;
 };
+
+// Where the 4D points of a set of global lines come from: independent random
+// numbers, or a randomised Halton sequence (bases 2, 3, 5, 7, shifted modulo 1
+// by a random vector per pass: Cranley-Patterson rotation), whose lines cover
+// the box more evenly, so faces get crossing counts closer to their expectation.
+class LineSequence {
+ public:
+  LineSequence(const std::string& kind, unsigned long long seed, unsigned pass);
+  void point(uint64_t index, Rng& rng, double u[4]) const;
+
+ private:
+  bool halton_ = false;
+  double shift_[4] = {0, 0, 0, 0};
+};
+
+double radical_inverse(uint64_t index, unsigned base);
 
 // Scene box enlarged so that no patch lies on its walls and flat scenes get volume.
 Bounds line_box(const Bounds& scene_bounds);

@@ -22,6 +22,26 @@ void collect_filter(const RTCFilterFunctionNArguments* args) {
   args->valid[0] = 0;  // reject, so traversal goes on to the next hit
 }
 
+// The intersect context of a nearest_from query.
+struct LeaveContext {
+  RTCIntersectContext context;
+  const PatchMesh* mesh;
+  int from;
+  double contact;  // distances below this are contacts with the start plane
+};
+
+void leave_filter(const RTCFilterFunctionNArguments* args) {
+  auto* ctx = reinterpret_cast<LeaveContext*>(args->context);
+  const int prim = static_cast<int>(RTCHitN_primID(args->hit, args->N, 0));
+  const float t = RTCRayN_tfar(args->ray, args->N, 0);
+  if (prim == ctx->from) {
+    args->valid[0] = 0;
+    return;
+  }
+  const auto& patches = ctx->mesh->patches;
+  if (t <= ctx->contact && dot(patches[prim].normal, patches[ctx->from].normal) > 0) args->valid[0] = 0;
+}
+
 void embree_error(void*, RTCError code, const char* message) {
   if (code != RTC_ERROR_NONE) fmt::print(stderr, "mpath: embree error {}: {}\n", static_cast<int>(code), message ? message : "");
 }
@@ -68,6 +88,7 @@ Tracer::Tracer(const PatchMesh& mesh) : mesh_(mesh) {
   rtcCommitScene(scene_);
   MPATH_CHECK(rtcGetDeviceError(device_) == RTC_ERROR_NONE, "embree scene build failed");
   tie_epsilon_ = 1e-7 * std::max(mesh.bounds.diagonal(), 1e-30);
+  hair_ = 1e-6 * std::max(mesh.bounds.diagonal(), 1e-30);
 }
 
 Tracer::~Tracer() {
@@ -88,6 +109,23 @@ NearestHit Tracer::nearest(const Vec3& org, const Vec3& dir, double tnear, doubl
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
   const int patch = static_cast<int>(rh.hit.primID);
   return {patch, plane_distance(patch, org, dir, rh.ray.tfar)};
+}
+
+NearestHit Tracer::nearest_from(int from, const Vec3& org, const Vec3& dir, double tfar) const {
+  // Start a hair behind the patch so that a surface touching it is met.
+  LeaveContext ctx;
+  rtcInitIntersectContext(&ctx.context);
+  ctx.context.filter = leave_filter;
+  ctx.mesh = &mesh_;
+  ctx.from = from;
+  ctx.contact = 2.0 * hair_;
+  const Vec3 start = org - dir * hair_;
+  RTCRayHit rh;
+  init_ray(rh, start, dir, 0.0, tfar);
+  rtcIntersect1(scene_, &ctx.context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
+  const int patch = static_cast<int>(rh.hit.primID);
+  return {patch, std::max(0.0, plane_distance(patch, start, dir, rh.ray.tfar) - hair_)};
 }
 
 double Tracer::plane_distance(int patch, const Vec3& org, const Vec3& dir, double fallback) const {

@@ -31,6 +31,11 @@ class Tracer {
 
   NearestHit nearest(const Vec3& org, const Vec3& dir, double tnear, double tfar) const;
 
+  // Nearest hit of a line leaving patch `from` at `org` (on the patch). Sees
+  // surfaces in contact with the patch (at distance 0, facing it), never the
+  // patch itself or coplanar patches facing its way.
+  NearestHit nearest_from(int from, const Vec3& org, const Vec3& dir, double tfar) const;
+
   // Every patch crossed by org + t dir, t in [0, tfar], sorted by distance,
   // with crossings repeated on shared edges of coplanar patches removed.
   // `scratch` is reused between calls to avoid allocation.
@@ -46,6 +51,7 @@ class Tracer {
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   double tie_epsilon_ = 0;
+  double hair_ = 0;  // a tiny fraction of the scene size
 };
 
 }  // namespace mpath

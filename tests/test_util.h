@@ -1,0 +1,62 @@
+// Helpers shared by the tests: scenes built in code, temporary folders,
+// running the programs, and an in-memory solve.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "classic.h"
+#include "config.h"
+#include "first_shot.h"
+#include "mesh.h"
+#include "radiosity_state.h"
+#include "scene.h"
+#include "tracer.h"
+
+namespace mpath::test {
+
+// A fresh directory under the system temp dir, removed at destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+void write_file(const std::filesystem::path& path, const std::string& text);
+std::string read_file(const std::filesystem::path& path);
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+RunResult run(const std::string& command);
+std::string solve_bin();
+std::filesystem::path shared_scenes();
+
+int add_material(Scene& scene, const std::string& name, double rho, double radiance, bool two_sided = false);
+int add_object(Scene& scene, const std::string& name);
+void add_quad(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, int material, int object);
+// Axis-aligned box; faces point out of it, or into it when `inward`.
+void add_box(Scene& scene, const Vec3& lo, const Vec3& hi, bool inward, int material, int object);
+
+// A closed room 2 x 1.5 x 1 with a floating cube and a block resting on the
+// floor; every surface has reflectance rho and emits exitance `exitance`.
+Scene furnace_scene(double rho, double exitance);
+
+// An in-memory classic solve, the same steps as mpath-solve.
+struct Solved {
+  PatchMesh mesh;
+  RadiosityState state;
+  IterationLog log;
+};
+Solved solve_classic_in_memory(const Scene& scene, const Options& options);
+
+// Options for in-memory solves: given lines, seed 1, 2 threads.
+Options test_options(long long global_lines, long long local_lines, double max_patch_area);
+
+}  // namespace mpath::test
