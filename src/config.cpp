@@ -333,6 +333,9 @@ Options load_options(const fs::path& config_path, const std::vector<std::string>
 
   Options options;
   options.config_file = file;
+  // Default folders live beside the config file, like the paths written in it.
+  options.store.dir = file.parent_path() / options.store.dir;
+  options.output.dir = file.parent_path() / options.output.dir;
   apply_table(root, "", file, cli_keys, options);
   if (options.scene.file.empty()) throw InputError(fmt::format("{}: config key 'scene.file' is required", file.string()));
   return options;

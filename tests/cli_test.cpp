@@ -1,0 +1,121 @@
+// mpath-solve as a user runs it: outputs, flags and every error message a
+// user can meet from bad input, each with a non-zero exit.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "test_util.h"
+
+namespace mpath {
+namespace {
+
+using test::RunResult;
+using test::TempDir;
+using test::write_file;
+
+const std::string kCornell = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box.toml";
+
+RunResult solve(const std::string& args) { return test::run(test::solve_bin() + " " + args); }
+
+bool has_temp_files(const std::filesystem::path& dir) {
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().filename().string().find(".tmp.") != std::string::npos) return true;
+  return false;
+}
+
+TEST(Cli, SolvesTheDefaultSceneAndWritesEveryOutput) {
+  TempDir dir;
+  const RunResult r = solve(kCornell + " lines.total=200000 first_shot.lines=100000 camera.0.width=64 output.dir=" +
+                            dir.path().string() + " -q");
+  // camera.0.width is not a config key: arrays of tables are set in the file.
+  EXPECT_NE(r.exit_code, 0);
+  const RunResult ok = solve(kCornell + " lines.total=200000 first_shot.lines=100000 output.dir=" + dir.path().string() + " -q");
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  for (const char* name : {"solution.ply", "report.json", "cornell.exr", "cornell.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir / name)) << name;
+  EXPECT_FALSE(has_temp_files(dir.path()));
+
+  const std::string ply = test::read_file(dir / "solution.ply");
+  EXPECT_EQ(ply.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
+  for (const char* p : {"area", "rho_r", "rho_g", "rho_b", "emit_r", "emit_g", "emit_b", "B_r", "B_g", "B_b"})
+    EXPECT_NE(ply.find(std::string("property float ") + p + "\n"), std::string::npos) << p;
+
+  const auto report = nlohmann::json::parse(test::read_file(dir / "report.json"));
+  const auto& e = report["energy"];
+  const double emitted = e["emitted"];
+  EXPECT_GT(emitted, 0);
+  EXPECT_NEAR(emitted, e["absorbed"].get<double>() + e["escaped"].get<double>() + e["unshot"].get<double>(), 1e-9 * emitted);
+  EXPECT_EQ(report["config"]["solver"]["method"], "classic");
+  EXPECT_EQ(report["lines"]["local"], 100000);
+  for (const char* phase : {"load", "mesh", "first_shot", "iterations", "outputs", "total"})
+    EXPECT_TRUE(report["timings"].contains(phase)) << phase;
+  EXPECT_GT(report["memory"]["peak_rss_bytes"].get<double>(), 0);
+
+  const std::string exr = test::read_file(dir / "cornell.exr");
+  EXPECT_EQ(exr.substr(0, 4), std::string("\x76\x2f\x31\x01", 4));
+  EXPECT_NE(exr.find("mpathVersion"), std::string::npos);
+  EXPECT_NE(exr.find("exposure"), std::string::npos);
+}
+
+TEST(Cli, PrintsTheEffectiveConfigWithOverrides) {
+  const RunResult r = solve(kCornell + " --print-config solver.iterations=3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("iterations = 3"), std::string::npos);
+  EXPECT_NE(r.output.find("method = 'classic'"), std::string::npos) << r.output;
+}
+
+TEST(Cli, DryRunChecksConfigAndSceneWithoutWriting) {
+  TempDir dir;
+  const RunResult r = solve(kCornell + " --dry-run output.dir=" + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+}
+
+// Writes a config around a scene file and expects a failing run whose one-line
+// error contains `expected`; no result may appear.
+void expect_failure(const std::string& scene_name, const std::string& scene_text, const std::string& config_extra,
+                    const std::string& overrides, const std::string& expected) {
+  TempDir dir;
+  if (!scene_name.empty()) write_file(dir / scene_name, scene_text);
+  write_file(dir / "s.mtl", "newmtl lamp\nKd 0.5\nKe 1 1 1\n");
+  write_file(dir / "run.toml", "scene.file = \"" + (scene_name.empty() ? "missing.obj" : scene_name) +
+                                   "\"\nsolver.method = \"classic\"\noutput.dir = \"out\"\n" + config_extra);
+  const RunResult r = solve((dir / "run.toml").string() + " -q " + overrides);
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("mpath-solve: error: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(expected), std::string::npos) << "wanted: " << expected << "\ngot: " << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/solution.ply"));
+}
+
+const std::string kTriangle = "mtllib s.mtl\nusemtl lamp\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+TEST(Cli, BadInputGivesAClearErrorAndNoResult) {
+  expect_failure("", "", "", "", "missing.obj: file not found");
+  expect_failure("s.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0\n", "", "", "s.obj:3: malformed 'v'");
+  expect_failure("s.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl wood\nf 1 2 3\n", "", "",
+                 "s.obj:5: unknown material 'wood'");
+  expect_failure("s.obj", kTriangle, "[scene.emitters]\nwood = [1, 1, 1]\n", "", "unknown material 'wood'");
+  expect_failure("s.obj", "v 0 0 NaN\n", "", "", "s.obj:1: expected a finite number for z, got 'NaN'");
+  expect_failure("s.obj", kTriangle, "solver.threds = 2\n", "", "run.toml:4: unknown config key 'solver.threds'");
+  expect_failure("s.obj", kTriangle, "lines.total = \"many\"\n", "",
+                 "config key 'lines.total': expected an integer, got a string");
+  expect_failure("s.obj", kTriangle, "", "lines.total=-5", "command line: config key 'lines.total': expected a positive integer");
+  expect_failure("s.obj", kTriangle, "", "solver.method=hierarchical", "solver.method");
+  expect_failure("s.mgf", "v a =\np 0 0 0\nsph a 1 2\n", "", "", "s.mgf:3: malformed 'sph'");
+  expect_failure("s.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n", "", "",
+                 "unexpected end of file in element 'vertex'");
+}
+
+TEST(Cli, MissingConfigAndUnwritableOutputAreErrors) {
+  RunResult r = solve("/nonexistent/run.toml");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("config file not found"), std::string::npos) << r.output;
+  TempDir dir;
+  write_file(dir / "blocker", "a file where the output folder should go");
+  r = solve(kCornell + " -q lines.total=1000 first_shot.lines=1000 output.dir=" + (dir / "blocker").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("mpath-solve: error: "), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace mpath

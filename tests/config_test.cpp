@@ -1,0 +1,118 @@
+#include "config.h"
+
+#include <gtest/gtest.h>
+
+#include "error.h"
+#include "test_util.h"
+
+namespace mpath {
+namespace {
+
+using test::TempDir;
+using test::write_file;
+
+std::string error_of(const std::filesystem::path& file, const std::vector<std::string>& overrides = {}) {
+  try {
+    load_options(file, overrides);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, ResolvesPathsInTheFileRelativeToTheFile) {
+  TempDir dir;
+  write_file(dir / "sub/run.toml", "scene.file = \"scenes/a.obj\"\n[output]\ndir = \"out\"\n");
+  const Options o = load_options(dir / "sub/run.toml", {});
+  EXPECT_EQ(o.scene.file, dir / "sub/scenes/a.obj");
+  EXPECT_EQ(o.output.dir, dir / "sub/out");
+  EXPECT_EQ(o.solver.method, "hierarchical");
+  EXPECT_EQ(o.lines.total, 1'000'000);
+}
+
+TEST(Config, CommandLineOverridesWinAndTheirPathsAreRelativeToTheWorkingDirectory) {
+  TempDir dir;
+  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n[solver]\niterations = 3\n");
+  const Options o = load_options(dir / "run.toml", {"solver.iterations=7", "output.dir=elsewhere", "solver.method=classic",
+                                                     "lines.sequence=random", "mesh.max_patch_area=0.5"});
+  EXPECT_EQ(o.solver.iterations, 7);
+  EXPECT_EQ(o.solver.method, "classic");
+  EXPECT_EQ(o.lines.sequence, "random");
+  EXPECT_DOUBLE_EQ(o.mesh.max_patch_area, 0.5);
+  EXPECT_EQ(o.output.dir, std::filesystem::current_path() / "elsewhere");
+}
+
+TEST(Config, UnknownKeyIsNamedWithFileAndLine) {
+  TempDir dir;
+  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n[solver]\nitterations = 3\n");
+  const std::string e = error_of(dir / "run.toml");
+  EXPECT_NE(e.find("unknown config key 'solver.itterations'"), std::string::npos) << e;
+  EXPECT_NE(e.find("run.toml:3"), std::string::npos) << e;
+}
+
+TEST(Config, WrongValueTypeIsNamed) {
+  TempDir dir;
+  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n[solver]\niterations = \"ten\"\n");
+  const std::string e = error_of(dir / "run.toml");
+  EXPECT_NE(e.find("'solver.iterations': expected an integer, got a string"), std::string::npos) << e;
+}
+
+TEST(Config, OutOfRangeAndUnknownChoicesAreRejected) {
+  TempDir dir;
+  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n");
+  EXPECT_NE(error_of(dir / "run.toml", {"lines.root_fraction=1.5"}).find("lines.root_fraction"), std::string::npos);
+  EXPECT_NE(error_of(dir / "run.toml", {"solver.method=magic"}).find("unknown method 'magic'"), std::string::npos);
+  EXPECT_NE(error_of(dir / "run.toml", {"lines.total=0"}).find("positive"), std::string::npos);
+  EXPECT_NE(error_of(dir / "run.toml", {"hierarchy.vp_grid=3"}).find("power of two"), std::string::npos);
+  EXPECT_NE(error_of(dir / "run.toml", {"no_equals_sign"}).find("expected key=value"), std::string::npos);
+  EXPECT_NE(error_of(dir / "run.toml", {"solver.bogus=1"}).find("command line: unknown config key 'solver.bogus'"),
+            std::string::npos);
+}
+
+TEST(Config, MalformedTomlAndMissingFilesAreReported) {
+  TempDir dir;
+  write_file(dir / "bad.toml", "scene.file = \"a.obj\"\n[solver\n");
+  EXPECT_NE(error_of(dir / "bad.toml").find("bad.toml:2: malformed TOML"), std::string::npos);
+  EXPECT_NE(error_of(dir / "missing.toml").find("config file not found"), std::string::npos);
+  write_file(dir / "noscene.toml", "[solver]\niterations = 2\n");
+  EXPECT_NE(error_of(dir / "noscene.toml").find("'scene.file' is required"), std::string::npos);
+}
+
+TEST(Config, EmittersCamerasAndTwoSidedAreRead) {
+  TempDir dir;
+  write_file(dir / "run.toml", R"(scene.file = "a.obj"
+scene.two_sided = ["shade"]
+[scene.emitters]
+lamp = [1.0, 2.0, 3.0]
+bulb = 5.0
+[[camera]]
+name = "front"
+position = [0, 1, 5]
+look_at = [0, 1, 0]
+width = 64
+height = 32
+)");
+  const Options o = load_options(dir / "run.toml", {});
+  EXPECT_EQ(o.scene.emitters.at("lamp"), (Rgb{1, 2, 3}));
+  EXPECT_EQ(o.scene.emitters.at("bulb"), (Rgb{5, 5, 5}));
+  EXPECT_EQ(o.scene.two_sided, std::vector<std::string>{"shade"});
+  ASSERT_EQ(o.cameras.size(), 1u);
+  EXPECT_EQ(o.cameras[0].name, "front");
+  EXPECT_EQ(o.cameras[0].width, 64);
+  write_file(dir / "cam.toml", "scene.file = \"a.obj\"\n[[camera]]\nposition = [0, 0, 0]\nlook_at = [0, 0, 0]\n");
+  EXPECT_NE(error_of(dir / "cam.toml").find("camera position equals look_at"), std::string::npos);
+  write_file(dir / "neg.toml", "scene.file = \"a.obj\"\n[scene.emitters]\nlamp = [1, -1, 0]\n");
+  EXPECT_NE(error_of(dir / "neg.toml").find("must not be negative"), std::string::npos);
+}
+
+TEST(Config, PrintedConfigLoadsBackUnchanged) {
+  TempDir dir;
+  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n[[camera]]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\n");
+  const Options a = load_options(dir / "run.toml", {"solver.tolerance=0.01", "scene.emitters.lamp=[1,1,1]"});
+  write_file(dir / "printed.toml", options_to_toml(a));
+  const Options b = load_options(dir / "printed.toml", {});
+  EXPECT_EQ(options_to_toml(a), options_to_toml(b));
+}
+
+}  // namespace
+}  // namespace mpath

@@ -1,0 +1,96 @@
+#include "mesh.h"
+
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+
+namespace mpath {
+namespace {
+
+Scene one_polygon(std::vector<Vec3> vertices, bool two_sided = false) {
+  Scene s;
+  test::add_material(s, "m", 0.5, 0.0, two_sided);
+  test::add_object(s, "o");
+  s.polygons.push_back(Polygon{std::move(vertices), 0, 0, 1});
+  return s;
+}
+
+double total_area(const PatchMesh& m) {
+  double a = 0;
+  for (const Patch& p : m.patches) a += p.area;
+  return a;
+}
+
+TEST(Mesh, KeepsAPolygonAlreadySmallEnoughAsOnePatch) {
+  const PatchMesh m = build_mesh(one_polygon({{0, 0, 0}, {1, 0, 0}, {1.2, 1, 0}, {0, 1, 0}}), 2.0);
+  ASSERT_EQ(m.patches.size(), 1u);
+  EXPECT_FALSE(m.patches[0].is_triangle());
+  EXPECT_NEAR(m.patches[0].area, 1.1, 1e-12);
+  EXPECT_NEAR(m.patches[0].normal.z, 1.0, 1e-12);
+}
+
+TEST(Mesh, SplitsAParallelogramIntoAGridWithinTheMaximumArea) {
+  const PatchMesh m = build_mesh(one_polygon({{0, 0, 0}, {3, 0, 0}, {3.5, 2, 0}, {0.5, 2, 0}}), 0.25);
+  // Edges of length 3 and 2.06 in steps of at most sqrt(0.25): 6 x 5 cells of area 0.2.
+  EXPECT_EQ(m.patches.size(), 6u * 5u);
+  for (const Patch& p : m.patches) {
+    EXPECT_LE(p.area, 0.25 + 1e-12);
+    EXPECT_NEAR(p.normal.z, 1.0, 1e-12);
+  }
+  EXPECT_NEAR(total_area(m), 6.0, 1e-9);
+}
+
+TEST(Mesh, SplitsOtherPolygonsIntoTrianglesWithinTheMaximumArea) {
+  const PatchMesh m = build_mesh(one_polygon({{0, 0, 0}, {4, 0, 0}, {0, 0, 3}}), 0.1);
+  EXPECT_GE(m.patches.size(), 60u);
+  for (const Patch& p : m.patches) {
+    EXPECT_TRUE(p.is_triangle());
+    EXPECT_LE(p.area, 0.1 * (1 + 1e-9));
+    EXPECT_NEAR(p.normal.y, -1.0, 1e-12);  // counter-clockwise seen from -y
+  }
+  EXPECT_NEAR(total_area(m), 6.0, 1e-9);
+}
+
+TEST(Mesh, TriangulatesAConcavePolygonWithoutChangingItsArea) {
+  const std::vector<Vec3> l_shape{{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}, {1, 2, 0}, {0, 2, 0}};
+  const auto triangles = triangulate(l_shape);
+  ASSERT_EQ(triangles.size(), 4u);
+  double area = 0;
+  for (const auto& t : triangles) {
+    const Vec3 n = cross(l_shape[t[1]] - l_shape[t[0]], l_shape[t[2]] - l_shape[t[0]]);
+    EXPECT_GT(n.z, 0);  // same orientation as the polygon
+    area += 0.5 * length(n);
+  }
+  EXPECT_NEAR(area, 3.0, 1e-12);
+  const PatchMesh m = build_mesh(one_polygon(l_shape), 10.0);
+  EXPECT_EQ(m.patches.size(), 4u);
+}
+
+TEST(Mesh, DropsAndCountsDegeneratePolygons) {
+  Scene s = one_polygon({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}});  // collinear
+  s.polygons.push_back(Polygon{{{0, 0, 0}, {0, 0, 0}, {1, 1, 0}}, 0, 0, 2});  // repeated corner
+  s.polygons.push_back(Polygon{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, 0, 0, 3});
+  const PatchMesh m = build_mesh(s, 1.0);
+  EXPECT_EQ(m.dropped_polygons, 2u);
+  EXPECT_EQ(m.patches.size(), 1u);
+}
+
+TEST(Mesh, GivesTwoSidedPatchesABackFace) {
+  const PatchMesh one = build_mesh(one_polygon({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}), 0.5);
+  EXPECT_EQ(one.face_count(), one.patches.size());
+  EXPECT_EQ(one.patches[0].face[1], -1);
+  const PatchMesh two = build_mesh(one_polygon({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, true), 0.5);
+  EXPECT_EQ(two.face_count(), 2 * two.patches.size());
+  const int back = two.patches[0].face[1];
+  EXPECT_EQ(two.face_side[back], 1);
+  EXPECT_NEAR(two.face_normal(back).z, -1.0, 1e-12);
+}
+
+TEST(Mesh, AutomaticPatchAreaFollowsTheSceneSize) {
+  const Scene s = test::furnace_scene(0.5, 1.0);
+  const PatchMesh m = build_mesh(s, 0.0);
+  EXPECT_NEAR(m.max_patch_area, s.bounds().surface_area() / 2000.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace mpath

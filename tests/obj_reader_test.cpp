@@ -1,0 +1,126 @@
+#include <gtest/gtest.h>
+
+#include "error.h"
+#include "scene_readers.h"
+#include "test_util.h"
+
+namespace mpath {
+namespace {
+
+using test::TempDir;
+using test::write_file;
+
+const char* kMtl = "newmtl wall\nKd 0.5 0.6 0.7\nnewmtl lamp\nKd 0.8\nKe 10 10 5\n";
+
+std::string obj_error(const std::string& obj, const std::string& mtl = kMtl) {
+  TempDir dir;
+  write_file(dir / "s.mtl", mtl);
+  write_file(dir / "s.obj", obj);
+  try {
+    read_obj(dir / "s.obj");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ObjReader, ReadsMaterialsObjectsAndFaces) {
+  TempDir dir;
+  write_file(dir / "s.mtl", kMtl);
+  write_file(dir / "s.obj", R"(mtllib s.mtl
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+vt 0 0
+vn 0 0 1
+o floor
+usemtl wall
+f 1/1/1 2/1/1 3/1/1 4/1/1
+g lamp_group
+usemtl lamp
+f -4 -3 -2
+f 1//1 3//1 4//1
+)");
+  const Scene s = read_obj(dir / "s.obj");
+  ASSERT_EQ(s.polygons.size(), 3u);
+  ASSERT_EQ(s.objects.size(), 2u);
+  EXPECT_EQ(s.objects[0].name, "floor");
+  EXPECT_EQ(s.objects[1].name, "lamp_group");
+  EXPECT_EQ(s.polygons[0].vertices.size(), 4u);
+  EXPECT_EQ(s.polygons[1].vertices[2], (Vec3{1, 1, 0}));
+  const Material& wall = s.materials[s.polygons[0].material];
+  EXPECT_EQ(wall.rho, (Rgb{0.5, 0.6, 0.7}));
+  const Material& lamp = s.materials[s.polygons[1].material];
+  EXPECT_EQ(lamp.rho, (Rgb{0.8, 0.8, 0.8}));
+  EXPECT_EQ(lamp.emission, (Rgb{10, 10, 5}));
+  EXPECT_EQ(s.polygons[2].object, 1);
+}
+
+TEST(ObjReader, NamesFileLineAndCauseOfBadInput) {
+  const std::string head = "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  std::string e = obj_error(head + "usemtl nothing\nf 1 2 3\n");
+  EXPECT_NE(e.find("s.obj:5: unknown material 'nothing'"), std::string::npos) << e;
+  e = obj_error("v 0 nan 0\n");
+  EXPECT_NE(e.find("s.obj:1: expected a finite number for y, got 'nan'"), std::string::npos) << e;
+  e = obj_error(head + "f 1 2\n");
+  EXPECT_NE(e.find("s.obj:5: malformed 'f'"), std::string::npos) << e;
+  e = obj_error(head + "f 1 2 9\n");
+  EXPECT_NE(e.find("s.obj:5: face vertex index 9 is out of range"), std::string::npos) << e;
+  e = obj_error("v 1 2 x\n");
+  EXPECT_NE(e.find("expected a number for z, got 'x'"), std::string::npos) << e;
+  e = obj_error("mtllib missing.mtl\n");
+  EXPECT_NE(e.find("material library"), std::string::npos) << e;
+  e = obj_error("bogus 1 2\n");
+  EXPECT_NE(e.find("s.obj:1: unknown OBJ statement 'bogus'"), std::string::npos) << e;
+  e = obj_error(head, "newmtl glow\nKd 1.2 0.5 0.5\n");
+  EXPECT_NE(e.find("reflectance 1.2 is outside [0, 1)"), std::string::npos) << e;
+}
+
+TEST(SceneLoader, AppliesConfigEmittersAndTwoSidedMaterialsByName) {
+  TempDir dir;
+  write_file(dir / "s.mtl", kMtl);
+  write_file(dir / "s.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl wall\nf 1 2 3\n");
+  Options o;
+  o.scene.file = dir / "s.obj";
+  o.scene.emitters["wall"] = {1, 2, 3};
+  o.scene.two_sided = {"wall"};
+  std::vector<std::string> warnings;
+  const Scene s = load_scene(o, warnings);
+  const Material& wall = s.materials[s.find_material("wall")];
+  EXPECT_EQ(wall.emission, (Rgb{1, 2, 3}));
+  EXPECT_TRUE(wall.two_sided);
+  o.scene.emitters["ghost"] = {1, 1, 1};
+  try {
+    load_scene(o, warnings);
+    FAIL() << "an unknown material in scene.emitters must be an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'scene.emitters.ghost': unknown material 'ghost'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneLoader, RejectsUnknownFormatsMissingFilesAndDarkScenes) {
+  TempDir dir;
+  Options o;
+  o.scene.file = dir / "s.xyz";
+  std::vector<std::string> w;
+  write_file(o.scene.file, "x");
+  EXPECT_THROW(load_scene(o, w), InputError);
+  o.scene.file = dir / "absent.obj";
+  try {
+    load_scene(o, w);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("absent.obj: file not found"), std::string::npos);
+  }
+  write_file(dir / "dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  o.scene.file = dir / "dark.obj";
+  try {
+    load_scene(o, w);
+    FAIL() << "a scene without emitters must be an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no emitting polygon"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace mpath

@@ -1,0 +1,138 @@
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <numbers>
+
+#include "error.h"
+#include "scene_readers.h"
+#include "solution_ply.h"
+#include "test_util.h"
+
+namespace mpath {
+namespace {
+
+using test::TempDir;
+using test::write_file;
+
+const char* kAsciiPly = R"(ply
+format ascii 1.0
+comment two triangles, one emitting, in two components
+element vertex 6
+property float x
+property float y
+property float z
+element face 2
+property list uchar int vertex_indices
+property float rho_r
+property float rho_g
+property float rho_b
+property float emit_r
+property float emit_g
+property float emit_b
+end_header
+0 0 0
+1 0 0
+0 1 0
+0 0 1
+1 0 1
+0 1 1
+3 0 1 2 0.5 0.5 0.5 0 0 0
+3 3 4 5 0.2 0.3 0.4 3.14159265 0 0
+)";
+
+// The same scene, binary, in the given byte order.
+std::string binary_ply(bool big_endian) {
+  std::string header = std::string("ply\nformat ") + (big_endian ? "binary_big_endian" : "binary_little_endian") +
+                       " 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+                       "element face 2\nproperty list uchar int vertex_indices\nproperty float rho_r\n"
+                       "property float rho_g\nproperty float rho_b\nproperty float emit_r\nproperty float emit_g\n"
+                       "property float emit_b\nend_header\n";
+  std::string body;
+  auto put = [&](auto v) {
+    char bytes[sizeof(v)];
+    std::memcpy(bytes, &v, sizeof(v));
+    if (big_endian) std::reverse(bytes, bytes + sizeof(v));
+    body.append(bytes, sizeof(v));
+  };
+  const float vertices[6][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+  for (const auto& v : vertices)
+    for (float c : v) put(c);
+  const float props[2][6] = {{0.5f, 0.5f, 0.5f, 0, 0, 0}, {0.2f, 0.3f, 0.4f, 3.14159265f, 0, 0}};
+  for (int f = 0; f < 2; ++f) {
+    put(static_cast<uint8_t>(3));
+    for (int k = 0; k < 3; ++k) put(static_cast<int32_t>(3 * f + k));
+    for (float p : props[f]) put(p);
+  }
+  return header + body;
+}
+
+void expect_two_triangles(const Scene& s) {
+  ASSERT_EQ(s.polygons.size(), 2u);
+  EXPECT_EQ(s.objects.size(), 2u);  // connected components
+  EXPECT_EQ(s.polygons[1].vertices[1], (Vec3{1, 0, 1}));
+  const Material& lamp = s.materials[s.polygons[1].material];
+  EXPECT_NEAR(lamp.rho[2], 0.4, 1e-6);
+  EXPECT_NEAR(lamp.emission[0], 1.0, 1e-6);  // exitance pi -> radiance 1
+  EXPECT_FALSE(s.materials[s.polygons[0].material].emits());
+}
+
+TEST(PlyReader, ReadsAsciiAndBothBinaryByteOrdersAlike) {
+  TempDir dir;
+  write_file(dir / "a.ply", kAsciiPly);
+  write_file(dir / "le.ply", binary_ply(false));
+  write_file(dir / "be.ply", binary_ply(true));
+  for (const char* name : {"a.ply", "le.ply", "be.ply"}) {
+    SCOPED_TRACE(name);
+    expect_two_triangles(read_ply(dir / name));
+  }
+}
+
+TEST(PlyReader, ReadsBackTheSolutionItWrote) {
+  TempDir dir;
+  const Scene scene = test::furnace_scene(0.5, 1.0);
+  const PatchMesh mesh = build_mesh(scene, 0.5);
+  RadiosityState state = make_state(scene, mesh);
+  for (size_t i = 0; i < state.phi.size(); ++i) state.phi[i] *= 2.0;
+  write_solution_ply(dir / "solution.ply", mesh, state);
+  const std::string text = test::read_file(dir / "solution.ply");
+  for (const char* prop : {"property float area", "property float rho_r", "property float emit_b", "property float B_g",
+                           "property int polygon", "property int object", "format binary_little_endian 1.0"})
+    EXPECT_NE(text.find(prop), std::string::npos) << prop;
+  const Scene back = read_ply(dir / "solution.ply");
+  ASSERT_EQ(back.polygons.size(), mesh.face_count());
+  EXPECT_EQ(back.objects.size(), scene.objects.size());
+  for (size_t f = 0; f < back.polygons.size(); f += 7) {
+    EXPECT_NEAR(polygon_area(back.polygons[f].vertices), mesh.face_area(static_cast<int>(f)), 1e-5);
+    EXPECT_NEAR(back.materials[back.polygons[f].material].rho[0], 0.5, 1e-6);
+    EXPECT_NEAR(back.materials[back.polygons[f].material].emission[1], 1.0 / std::numbers::pi, 1e-6);
+  }
+}
+
+TEST(PlyReader, ReportsTruncatedAndMalformedFiles) {
+  TempDir dir;
+  std::string truncated = binary_ply(false);
+  truncated.resize(truncated.size() - 10);
+  write_file(dir / "t.ply", truncated);
+  try {
+    read_ply(dir / "t.ply");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unexpected end of file in element 'face' item 1 of 2"), std::string::npos) << e.what();
+  }
+  std::string bad_index = kAsciiPly;
+  bad_index.replace(bad_index.find("3 3 4 5"), 7, "3 3 4 9");
+  write_file(dir / "i.ply", bad_index);
+  EXPECT_THROW(read_ply(dir / "i.ply"), InputError);
+  write_file(dir / "h.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty quaternion x\nend_header\n");
+  try {
+    read_ply(dir / "h.ply");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("h.ply:4: malformed property"), std::string::npos) << e.what();
+  }
+  write_file(dir / "n.ply", "solid x\n");
+  EXPECT_THROW(read_ply(dir / "n.ply"), InputError);
+}
+
+}  // namespace
+}  // namespace mpath

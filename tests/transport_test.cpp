@@ -1,0 +1,97 @@
+#include "transport.h"
+
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+
+namespace mpath {
+namespace {
+
+// Floor (faces +y, y = 0), a block bottom on it (faces -y, y = 0), the
+// block's top (faces +y, y = 1) and a ceiling (faces -y, y = 2); one-sided.
+struct Column {
+  Scene scene;
+  PatchMesh mesh;
+  Column() {
+    const int m = test::add_material(scene, "m", 0.5, 0.0);
+    const int o = test::add_object(scene, "o");
+    auto horizontal = [&](double y, bool up) {
+      if (up) test::add_quad(scene, {0, y, 0}, {0, y, 1}, {1, y, 1}, {1, y, 0}, m, o);
+      else test::add_quad(scene, {0, y, 0}, {1, y, 0}, {1, y, 1}, {0, y, 1}, m, o);
+    };
+    horizontal(0, true);   // 0 floor
+    horizontal(0, false);  // 1 block bottom
+    horizontal(1, true);   // 2 block top
+    horizontal(2, false);  // 3 ceiling
+    mesh = build_mesh(scene, 10.0);
+  }
+};
+
+TEST(OrderTies, PutsTheFloorBeforeTheBlockOnItWhicheverWayTheLineRuns) {
+  const Column c;
+  const Vec3 up{0, 1, 0};
+  std::vector<LineHit> hits{{0.0, 1}, {0.0, 0}, {1.0, 2}, {2.0, 3}};
+  order_ties(c.mesh, up, 1e-9, hits);
+  EXPECT_EQ(hits[0].patch, 0);  // floor top faces the block bottom
+  EXPECT_EQ(hits[1].patch, 1);
+  std::vector<LineHit> down{{0.0, 3}, {1.0, 2}, {2.0, 0}, {2.0, 1}};
+  order_ties(c.mesh, -up, 1e-9, down);
+  EXPECT_EQ(down[2].patch, 1);  // coming down: block bottom, then the floor
+  EXPECT_EQ(down[3].patch, 0);
+}
+
+TEST(Transport, ConservesPowerAlongALineAndAbsorbsAtBlackBacks) {
+  const Column c;
+  RadiosityState state = make_state(c.scene, c.mesh);
+  PassInputs in;
+  in.state = &state;
+  in.mesh = &c.mesh;
+  in.quota.assign(state.faces, 0.0);
+  in.share.assign(state.faces, 0.25);
+  in.quota[2] = 8.0;  // the block top has 8 W to send, 2 W per crossing
+  in.quota[3] = 4.0;  // the ceiling 4 W, 1 W per crossing
+  ShardAccumulator acc;
+  acc.reset(state.faces, state.channels);
+  const Vec3 up{0, 1, 0};
+  std::vector<LineHit> hits{{0.0, 0}, {0.0, 1}, {1.0, 2}, {2.0, 3}};
+  transport_line(in, up, hits, acc);
+  // The top sends 2 W up to the ceiling, which keeps rho = 0.5 of it; the
+  // ceiling sends 1 W down to the top, which keeps 0.5 W. Both backs are black.
+  EXPECT_DOUBLE_EQ(acc.phi_gain[3], 1.0);
+  EXPECT_DOUBLE_EQ(acc.phi_gain[2], 0.5);
+  EXPECT_DOUBLE_EQ(acc.gathered[3], 1.0);
+  EXPECT_DOUBLE_EQ(acc.absorbed[0], 1.5);
+  EXPECT_DOUBLE_EQ(acc.escaped[0], 0.0);
+  // Sends come before receives: the top's gathered 0.5 W was not sent back.
+  EXPECT_DOUBLE_EQ(acc.quota_used[2], 0.25);
+  // A second line sends the top's gathered power along with its share.
+  transport_line(in, up, hits, acc);
+  EXPECT_DOUBLE_EQ(acc.phi_gain[3], 1.0 + 0.5 * 2.5);
+  double sent = 0;
+  for (int f : {2, 3}) sent += in.quota[f] * acc.quota_used[f];
+  double held = 0;
+  for (double g : acc.gathered) held += g;
+  EXPECT_DOUBLE_EQ(sent, acc.absorbed[0] + acc.escaped[0] + held);
+}
+
+TEST(Transport, PowerLeavingTheEndsOfALineEscapes) {
+  const Column c;
+  RadiosityState state = make_state(c.scene, c.mesh);
+  PassInputs in;
+  in.state = &state;
+  in.mesh = &c.mesh;
+  in.quota.assign(state.faces, 0.0);
+  in.share.assign(state.faces, 1.0);
+  in.quota[2] = 3.0;
+  ShardAccumulator acc;
+  acc.reset(state.faces, state.channels);
+  transport_line(in, {0, 1, 0}, {{1.0, 2}}, acc);  // only the block top on this line
+  EXPECT_DOUBLE_EQ(acc.escaped[0], 3.0);
+  // A shard never sends more than its allowance of a quota.
+  acc.allowance = 1.0;
+  transport_line(in, {0, 1, 0}, {{1.0, 2}}, acc);
+  EXPECT_DOUBLE_EQ(acc.escaped[0], 3.0);
+}
+
+}  // namespace
+}  // namespace mpath
