@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -40,6 +41,16 @@ void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, 
 }
 
 }  // namespace
+
+uint64_t coverage_lines(const PatchMesh& mesh) {
+  std::vector<double> areas;
+  for (const Patch& p : mesh.patches) areas.push_back(p.area);
+  if (areas.empty()) return 0;
+  std::nth_element(areas.begin(), areas.begin() + areas.size() / 2, areas.end());
+  const double median = areas[areas.size() / 2];
+  // N lines cross a face N 2A/S times: 16 crossings need N = 8S/A.
+  return std::max<uint64_t>(10000, static_cast<uint64_t>(std::ceil(8.0 * line_box(mesh.bounds).surface_area() / median)));
+}
 
 PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, uint64_t lines,
                        unsigned long long seed, unsigned pass, int shards, const std::string& sequence) {
@@ -101,7 +112,7 @@ IterationLog solve_classic(const Options& options, const PatchMesh& mesh, const 
   IterationLog log;
   const double first_unshot = state.unshot_total();
   const double emitted = state.emitted_total();
-  const auto floor_lines = static_cast<uint64_t>(std::min<long long>(options.lines.total, 10000));
+  const auto floor_lines = std::min(static_cast<uint64_t>(options.lines.total), coverage_lines(mesh));
   for (int pass = 1; pass <= options.solver.iterations; ++pass) {
     const double unshot = state.unshot_total();
     if (unshot / emitted < options.solver.tolerance) {

@@ -29,9 +29,13 @@ struct IterationLog {
   bool converged = false;
 };
 
+// Lines that cross the median face about 16 times: the fewest a pass casts,
+// so that what is left unshot keeps moving.
+uint64_t coverage_lines(const PatchMesh& mesh);
+
 // Runs passes until unshot / emitted < solver.tolerance or solver.iterations
-// passes. Pass k casts lines.total * U_k / U_1 lines (at least a floor), so
-// lines follow the power left to distribute.
+// passes. Pass k casts lines.total * U_k / U_1 lines (at least
+// coverage_lines), so lines follow the power left to distribute.
 IterationLog solve_classic(const Options& options, const PatchMesh& mesh, const Tracer& tracer,
                            RadiosityState& state, int shards);
 

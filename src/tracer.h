@@ -45,6 +45,8 @@ class Tracer {
   double plane_distance(int patch, const Vec3& org, const Vec3& dir, double fallback) const;
 
   static std::string embree_version();
+  // The Embree scene, for benchmarks that measure Embree alone.
+  RTCScene embree_scene() const { return scene_; }
 
  private:
   const PatchMesh& mesh_;
