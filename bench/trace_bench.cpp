@@ -19,6 +19,7 @@
 #include "prepared_scene.h"
 #include "progress.h"
 #include "sampling.h"
+#include "transport.h"
 
 namespace {
 
@@ -72,6 +73,30 @@ uint64_t raw_pass(const Tracer& tracer, const PatchMesh& mesh, uint64_t lines, u
   return total;
 }
 
+// mpath's tracer without transport: all hits, sorted, de-duplicated, ties ordered.
+uint64_t tracer_pass(const Tracer& tracer, const PatchMesh& mesh, uint64_t lines, unsigned long long seed, unsigned pass,
+                     int shards, const std::string& sequence) {
+  const LineSequence points(sequence, seed, pass);
+  const BoxLineSampler sampler(line_box(mesh.bounds));
+  const double tie_epsilon = 1e-7 * mesh.bounds.diagonal();
+  std::vector<uint64_t> hits(shards, 0);
+  tbb::parallel_for(0, shards, [&](int s) {
+    Rng rng = make_rng(seed, 2, (static_cast<unsigned long long>(pass) << 20) + s);
+    std::vector<LineHit> found;
+    for (uint64_t i = lines * s / shards; i < lines * (s + 1) / shards; ++i) {
+      double u[4];
+      points.point(i, rng, u);
+      const GlobalLine line = sampler.sample(u);
+      tracer.all_hits(line.org, line.dir, line.length, found);
+      order_ties(mesh, tie_epsilon, found);
+      hits[s] += found.size();
+    }
+  });
+  uint64_t total = 0;
+  for (uint64_t h : hits) total += h;
+  return total;
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
@@ -103,13 +128,16 @@ int main(int argc, char** argv) {
   const std::vector<double> initial = state.emitted_power;
 
   using clock = std::chrono::steady_clock;
-  std::vector<double> raw_rate, solver_rate;
+  std::vector<double> raw_rate, tracer_rate, solver_rate;
   uint64_t raw_hits = 0, solver_hits = 0;
   // Alternate the two so that both see the same machine load.
   for (int r = 0; r < repeats; ++r) {
     auto t = clock::now();
     raw_hits = raw_pass(tracer, prepared.mesh, lines, options.lines.seed, 1, threads, options.lines.sequence);
     raw_rate.push_back(lines / std::chrono::duration<double>(clock::now() - t).count());
+    t = clock::now();
+    tracer_pass(tracer, prepared.mesh, lines, options.lines.seed, 1, threads, options.lines.sequence);
+    tracer_rate.push_back(lines / std::chrono::duration<double>(clock::now() - t).count());
     state.unshot = initial;  // every face has power to send
     t = clock::now();
     const PassStats p = classic_pass(prepared.mesh, tracer, state, lines, options.lines.seed, 1, threads, options.lines.sequence);
@@ -123,11 +151,13 @@ int main(int argc, char** argv) {
                       {"threads", threads},
                       {"sequence", options.lines.sequence},
                       {"raw_lines_per_s", raw},
+                      {"tracer_lines_per_s", median(tracer_rate)},
                       {"solver_lines_per_s", solver},
                       {"ratio", solver / raw},
                       {"raw_hits_per_line", static_cast<double>(raw_hits) / lines},
                       {"solver_hits_per_line", static_cast<double>(solver_hits) / lines},
                       {"raw_runs", raw_rate},
+                      {"tracer_runs", tracer_rate},
                       {"solver_runs", solver_rate},
                       {"commit", MPATH_GIT_COMMIT},
                       {"embree", Tracer::embree_version()},

@@ -84,8 +84,8 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
       points.point(i, rng, u);
       const GlobalLine line = sampler.sample(u);
       tracer.all_hits(line.org, line.dir, line.length, hits);
-      order_ties(mesh, line.dir, tie_epsilon, hits);
-      transport_line(in, line.dir, hits, a);
+      order_ties(mesh, tie_epsilon, hits);
+      transport_line(in, hits, a);
       if (++since_report == 4096) {
         progress.advance(since_report);
         since_report = 0;

@@ -101,8 +101,8 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
       if (hit.patch < 0) {
         for (int c = 0; c < ch; ++c) a.escaped[c] += power[c];
       } else {
-        const Patch& target = mesh.patches[hit.patch];
-        receive(state, dot(target.normal, dir) < 0 ? target.face[0] : target.face[1], power, a);
+        const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
+        receive(state, mesh.patch_faces[hit.patch][side], power, a);
       }
       ++a.lines;
       if (++since_report == 4096) {

@@ -89,7 +89,7 @@ Image render_camera(const CameraOptions& cam, const PatchMesh& mesh, const Trace
         if (hit.patch < 0) continue;
         const Patch& p = mesh.patches[hit.patch];
         const int side = dot(p.normal, dir) < 0 ? 0 : 1;
-        if (p.face[side] < 0) continue;  // the black back of a one-sided patch
+        if (mesh.patch_faces[hit.patch][side] < 0) continue;  // the black back of a one-sided patch
         const auto b = radiosity.at(hit.patch, side, cam.position + dir * hit.t);
         for (int c = 0; c < 3; ++c) sum[c] += b[c];
       }

@@ -36,20 +36,19 @@ struct Facing {
   int backward;
 };
 
-Facing facing(const PatchMesh& mesh, const LineHit& h, const Vec3& dir) {
-  const Patch& p = mesh.patches[h.patch];
-  if (dot(p.normal, dir) > 0) return {p.face[0], p.face[1]};
-  return {p.face[1], p.face[0]};
+Facing facing(const PatchMesh& mesh, const LineHit& h) {
+  const auto& f = mesh.patch_faces[h.patch];
+  return h.along ? Facing{f[0], f[1]} : Facing{f[1], f[0]};
 }
 
 // Live/black mismatches between neighbours in hits[lo..hi] and their outside neighbours.
-int mismatches(const PatchMesh& mesh, const Vec3& dir, const std::vector<LineHit>& hits, size_t lo, size_t hi) {
+int mismatches(const PatchMesh& mesh, const std::vector<LineHit>& hits, size_t lo, size_t hi) {
   int count = 0;
   const size_t from = lo > 0 ? lo - 1 : lo;
   const size_t to = std::min(hi + 1, hits.size() - 1);
   for (size_t i = from; i < to; ++i) {
-    const bool a = facing(mesh, hits[i], dir).forward >= 0;
-    const bool b = facing(mesh, hits[i + 1], dir).backward >= 0;
+    const bool a = facing(mesh, hits[i]).forward >= 0;
+    const bool b = facing(mesh, hits[i + 1]).backward >= 0;
     count += a != b;
   }
   return count;
@@ -57,7 +56,7 @@ int mismatches(const PatchMesh& mesh, const Vec3& dir, const std::vector<LineHit
 
 }  // namespace
 
-void order_ties(const PatchMesh& mesh, const Vec3& dir, double epsilon, std::vector<LineHit>& hits) {
+void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hits) {
   size_t i = 0;
   while (i + 1 < hits.size()) {
     size_t j = i;
@@ -67,12 +66,12 @@ void order_ties(const PatchMesh& mesh, const Vec3& dir, double epsilon, std::vec
       std::vector<LineHit> best(hits.begin() + i, hits.begin() + j + 1);
       std::sort(best.begin(), best.end(), [](const LineHit& a, const LineHit& b) { return a.patch < b.patch; });
       std::copy(best.begin(), best.end(), hits.begin() + i);
-      int best_cost = mismatches(mesh, dir, hits, i, j);
+      int best_cost = mismatches(mesh, hits, i, j);
       std::vector<LineHit> perm = best;
       while (best_cost > 0 && std::next_permutation(perm.begin(), perm.end(),
                                                     [](const LineHit& a, const LineHit& b) { return a.patch < b.patch; })) {
         std::copy(perm.begin(), perm.end(), hits.begin() + i);
-        const int cost = mismatches(mesh, dir, hits, i, j);
+        const int cost = mismatches(mesh, hits, i, j);
         if (cost < best_cost) {
           best_cost = cost;
           best = perm;
@@ -84,7 +83,7 @@ void order_ties(const PatchMesh& mesh, const Vec3& dir, double epsilon, std::vec
   }
 }
 
-void transport_line(const PassInputs& in, const Vec3& dir, const std::vector<LineHit>& hits, ShardAccumulator& acc) {
+void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, ShardAccumulator& acc) {
   const RadiosityState& s = *in.state;
   const PatchMesh& mesh = *in.mesh;
   const int ch = s.channels;
@@ -93,12 +92,8 @@ void transport_line(const PassInputs& in, const Vec3& dir, const std::vector<Lin
   acc.hits += n;
   if (n == 0) return;
 
-  struct Send {
-    int to_hit;   // -1 or n: off the end of the line (escapes)
-    bool forward; // travelling along dir
-    double power[3];
-  };
-  thread_local std::vector<Send> sends;
+  using Send = ShardAccumulator::Send;
+  std::vector<Send>& sends = acc.sends;
   sends.clear();
 
   auto send_from = [&](int face, int to_hit, bool forward) {
@@ -118,7 +113,7 @@ void transport_line(const PassInputs& in, const Vec3& dir, const std::vector<Lin
   };
 
   for (size_t i = 0; i < n; ++i) {
-    const Facing f = facing(mesh, hits[i], dir);
+    const Facing f = facing(mesh, hits[i]);
     send_from(f.forward, static_cast<int>(i) + 1, true);
     send_from(f.backward, static_cast<int>(i) - 1, false);
   }
@@ -127,7 +122,7 @@ void transport_line(const PassInputs& in, const Vec3& dir, const std::vector<Lin
       for (int c = 0; c < ch; ++c) acc.escaped[c] += out.power[c];
       continue;
     }
-    const Facing f = facing(mesh, hits[out.to_hit], dir);
+    const Facing f = facing(mesh, hits[out.to_hit]);
     receive(s, out.forward ? f.backward : f.forward, out.power, acc);
   }
 }

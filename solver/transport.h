@@ -29,6 +29,14 @@ struct ShardAccumulator {
   std::array<double, 3> absorbed{}, escaped{};
   uint64_t lines = 0, hits = 0;
 
+  // Scratch of transport_line: the sends of one line, taken before its receives.
+  struct Send {
+    int to_hit;    // -1 or the hit count: off the end of the line (escapes)
+    bool forward;  // travelling along the line's direction
+    double power[3];
+  };
+  std::vector<Send> sends;
+
   void reset(size_t faces, int channels);
 };
 
@@ -39,11 +47,11 @@ void receive(const RadiosityState& state, int face, const double* power, ShardAc
 // Reorders crossings at equal distance so that, where some order allows, a
 // live face is never paired with a black back side (objects resting on
 // surfaces, back-to-back walls).
-void order_ties(const PatchMesh& mesh, const Vec3& dir, double epsilon, std::vector<LineHit>& hits);
+void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hits);
 
 // One line in both directions: every face on it sends its per-line share of
 // its quota plus what it gathered earlier in the pass; all sends are taken
 // before any receive. Power leaving the ends of the line escapes.
-void transport_line(const PassInputs& in, const Vec3& dir, const std::vector<LineHit>& hits, ShardAccumulator& acc);
+void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, ShardAccumulator& acc);
 
 }  // namespace mpath

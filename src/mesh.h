@@ -19,7 +19,6 @@ struct Patch {
   int polygon = 0;
   int object = 0;
   int material = 0;
-  std::array<int, 2> face{-1, -1};  // front and back face, -1 for a black back
 
   bool is_triangle() const { return v[3] == v[2]; }
 };
@@ -27,6 +26,9 @@ struct Patch {
 struct PatchMesh {
   std::vector<Vec3> vertices;
   std::vector<Patch> patches;
+  // Per patch: front and back face, -1 for a black back (kept apart from
+  // Patch so the hot transport loop reads 8 bytes a crossing).
+  std::vector<std::array<int, 2>> patch_faces;
   std::vector<int> face_patch;     // face -> patch
   std::vector<uint8_t> face_side;  // face -> 0 front, 1 back
   double max_patch_area = 0;

@@ -18,7 +18,7 @@ void collect_filter(const RTCFilterFunctionNArguments* args) {
   auto* ctx = reinterpret_cast<CollectContext*>(args->context);
   const float t = RTCRayN_tfar(args->ray, args->N, 0);
   const unsigned prim = RTCHitN_primID(args->hit, args->N, 0);
-  ctx->hits->push_back({static_cast<double>(t), static_cast<int>(prim)});
+  ctx->hits->push_back({static_cast<double>(t), static_cast<int>(prim), false});
   args->valid[0] = 0;  // reject, so traversal goes on to the next hit
 }
 
@@ -66,6 +66,8 @@ void init_ray(RTCRayHit& rh, const Vec3& org, const Vec3& dir, double tnear, dou
 }  // namespace
 
 Tracer::Tracer(const PatchMesh& mesh) : mesh_(mesh) {
+  planes_.reserve(mesh.patches.size());
+  for (const Patch& p : mesh.patches) planes_.push_back({p.normal, dot(p.normal, mesh.vertices[p.v[0]])});
   device_ = rtcNewDevice("verbose=0");
   MPATH_CHECK(device_ != nullptr, "rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
   rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
@@ -129,10 +131,10 @@ NearestHit Tracer::nearest_from(int from, const Vec3& org, const Vec3& dir, doub
 }
 
 double Tracer::plane_distance(int patch, const Vec3& org, const Vec3& dir, double fallback) const {
-  const Patch& p = mesh_.patches[patch];
-  const double denom = dot(p.normal, dir);
+  const Plane& p = planes_[patch];
+  const double denom = dot(p.n, dir);
   if (std::fabs(denom) < 1e-12) return fallback;
-  return dot(p.normal, mesh_.vertices[p.v[0]] - org) / denom;
+  return (p.d - dot(p.n, org)) / denom;
 }
 
 void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector<LineHit>& out) const {
@@ -144,7 +146,12 @@ void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector
   RTCRayHit rh;
   init_ray(rh, org, dir, 0.0, tfar);
   rtcIntersect1(scene_, &ctx.context, &rh);
-  for (LineHit& h : out) h.t = plane_distance(h.patch, org, dir, h.t);
+  for (LineHit& h : out) {
+    const Plane& p = planes_[h.patch];
+    const double denom = dot(p.n, dir);
+    h.along = denom > 0;
+    if (std::fabs(denom) >= 1e-12) h.t = (p.d - dot(p.n, org)) / denom;
+  }
   // Few hits per line: insertion sort beats std::sort here.
   for (size_t i = 1; i < out.size(); ++i) {
     const LineHit h = out[i];
@@ -161,9 +168,7 @@ void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector
   for (size_t i = 0; i < out.size(); ++i) {
     bool duplicate = false;
     for (size_t j = kept; j-- > 0 && out[i].t - out[j].t <= tie_epsilon_;) {
-      const Patch& a = mesh_.patches[out[i].patch];
-      const Patch& b = mesh_.patches[out[j].patch];
-      if (out[i].patch == out[j].patch || dot(a.normal, b.normal) > 1.0 - 1e-9) {
+      if (out[i].patch == out[j].patch || dot(planes_[out[i].patch].n, planes_[out[j].patch].n) > 1.0 - 1e-9) {
         duplicate = true;
         break;
       }

@@ -15,6 +15,7 @@ namespace mpath {
 struct LineHit {
   double t;
   int patch;
+  bool along;  // the patch's front faces along the line's direction
 };
 
 struct NearestHit {
@@ -49,7 +50,12 @@ class Tracer {
   RTCScene embree_scene() const { return scene_; }
 
  private:
+  struct Plane {
+    Vec3 n;
+    double d;  // n . x = d on the plane
+  };
   const PatchMesh& mesh_;
+  std::vector<Plane> planes_;
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   double tie_epsilon_ = 0;

@@ -78,10 +78,10 @@ TEST(Mesh, DropsAndCountsDegeneratePolygons) {
 TEST(Mesh, GivesTwoSidedPatchesABackFace) {
   const PatchMesh one = build_mesh(one_polygon({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}), 0.5);
   EXPECT_EQ(one.face_count(), one.patches.size());
-  EXPECT_EQ(one.patches[0].face[1], -1);
+  EXPECT_EQ(one.patch_faces[0][1], -1);
   const PatchMesh two = build_mesh(one_polygon({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, true), 0.5);
   EXPECT_EQ(two.face_count(), 2 * two.patches.size());
-  const int back = two.patches[0].face[1];
+  const int back = two.patch_faces[0][1];
   EXPECT_EQ(two.face_side[back], 1);
   EXPECT_NEAR(two.face_normal(back).z, -1.0, 1e-12);
 }

@@ -27,15 +27,22 @@ struct Column {
   }
 };
 
+// Crossings of the column by a vertical line, `along` set from the patch normals.
+std::vector<LineHit> crossings(const PatchMesh& mesh, const Vec3& dir, std::vector<std::pair<double, int>> list) {
+  std::vector<LineHit> hits;
+  for (auto [t, patch] : list) hits.push_back({t, patch, dot(mesh.patches[patch].normal, dir) > 0});
+  return hits;
+}
+
 TEST(OrderTies, PutsTheFloorBeforeTheBlockOnItWhicheverWayTheLineRuns) {
   const Column c;
   const Vec3 up{0, 1, 0};
-  std::vector<LineHit> hits{{0.0, 1}, {0.0, 0}, {1.0, 2}, {2.0, 3}};
-  order_ties(c.mesh, up, 1e-9, hits);
+  std::vector<LineHit> hits = crossings(c.mesh, up, {{0.0, 1}, {0.0, 0}, {1.0, 2}, {2.0, 3}});
+  order_ties(c.mesh, 1e-9, hits);
   EXPECT_EQ(hits[0].patch, 0);  // floor top faces the block bottom
   EXPECT_EQ(hits[1].patch, 1);
-  std::vector<LineHit> down{{0.0, 3}, {1.0, 2}, {2.0, 0}, {2.0, 1}};
-  order_ties(c.mesh, -up, 1e-9, down);
+  std::vector<LineHit> down = crossings(c.mesh, -up, {{0.0, 3}, {1.0, 2}, {2.0, 0}, {2.0, 1}});
+  order_ties(c.mesh, 1e-9, down);
   EXPECT_EQ(down[2].patch, 1);  // coming down: block bottom, then the floor
   EXPECT_EQ(down[3].patch, 0);
 }
@@ -53,8 +60,8 @@ TEST(Transport, ConservesPowerAlongALineAndAbsorbsAtBlackBacks) {
   ShardAccumulator acc;
   acc.reset(state.faces, state.channels);
   const Vec3 up{0, 1, 0};
-  std::vector<LineHit> hits{{0.0, 0}, {0.0, 1}, {1.0, 2}, {2.0, 3}};
-  transport_line(in, up, hits, acc);
+  const std::vector<LineHit> hits = crossings(c.mesh, up, {{0.0, 0}, {0.0, 1}, {1.0, 2}, {2.0, 3}});
+  transport_line(in, hits, acc);
   // The top sends 2 W up to the ceiling, which keeps rho = 0.5 of it; the
   // ceiling sends 1 W down to the top, which keeps 0.5 W. Both backs are black.
   EXPECT_DOUBLE_EQ(acc.phi_gain[3], 1.0);
@@ -65,7 +72,7 @@ TEST(Transport, ConservesPowerAlongALineAndAbsorbsAtBlackBacks) {
   // Sends come before receives: the top's gathered 0.5 W was not sent back.
   EXPECT_DOUBLE_EQ(acc.quota_used[2], 0.25);
   // A second line sends the top's gathered power along with its share.
-  transport_line(in, up, hits, acc);
+  transport_line(in, hits, acc);
   EXPECT_DOUBLE_EQ(acc.phi_gain[3], 1.0 + 0.5 * 2.5);
   double sent = 0;
   for (int f : {2, 3}) sent += in.quota[f] * acc.quota_used[f];
@@ -85,11 +92,12 @@ TEST(Transport, PowerLeavingTheEndsOfALineEscapes) {
   in.quota[2] = 3.0;
   ShardAccumulator acc;
   acc.reset(state.faces, state.channels);
-  transport_line(in, {0, 1, 0}, {{1.0, 2}}, acc);  // only the block top on this line
+  const std::vector<LineHit> top = crossings(c.mesh, {0, 1, 0}, {{1.0, 2}});  // only the block top on this line
+  transport_line(in, top, acc);
   EXPECT_DOUBLE_EQ(acc.escaped[0], 3.0);
   // A shard never sends more than its allowance of a quota.
   acc.allowance = 1.0;
-  transport_line(in, {0, 1, 0}, {{1.0, 2}}, acc);
+  transport_line(in, top, acc);
   EXPECT_DOUBLE_EQ(acc.escaped[0], 3.0);
 }
 
