@@ -41,45 +41,97 @@ Facing facing(const PatchMesh& mesh, const LineHit& h) {
   return h.along ? Facing{f[0], f[1]} : Facing{f[1], f[0]};
 }
 
-// Live/black mismatches between neighbours in hits[lo..hi] and their outside neighbours.
-int mismatches(const PatchMesh& mesh, const std::vector<LineHit>& hits, size_t lo, size_t hi) {
-  int count = 0;
-  const size_t from = lo > 0 ? lo - 1 : lo;
-  const size_t to = std::min(hi + 1, hits.size() - 1);
-  for (size_t i = from; i < to; ++i) {
-    const bool a = facing(mesh, hits[i]).forward >= 0;
-    const bool b = facing(mesh, hits[i + 1]).backward >= 0;
-    count += a != b;
-  }
-  return count;
+// Orders of one group of crossings at equal distance and what they cost.
+struct GroupOrder {
+  std::array<uint8_t, 5> perm{};  // offsets into the group
+  bool first_back_live = false;   // the first crossing's face towards the line start
+  bool last_forward_live = false; // the last crossing's face towards the line end
+  int inner = 0;                  // live/black pairs inside the group
+};
+
+constexpr size_t kMaxTieGroup = 5;
+
+std::vector<GroupOrder> group_orders(const PatchMesh& mesh, const std::vector<LineHit>& hits, size_t lo, size_t n) {
+  std::array<uint8_t, 5> perm{};
+  for (size_t k = 0; k < n; ++k) perm[k] = static_cast<uint8_t>(k);
+  // Start from the order of patch indices so that ties between equal costs
+  // resolve the same way whatever order Embree reported the hits in.
+  std::sort(perm.begin(), perm.begin() + n, [&](uint8_t a, uint8_t b) { return hits[lo + a].patch < hits[lo + b].patch; });
+  std::vector<GroupOrder> out;
+  do {
+    GroupOrder g;
+    g.perm = perm;
+    g.first_back_live = facing(mesh, hits[lo + perm[0]]).backward >= 0;
+    g.last_forward_live = facing(mesh, hits[lo + perm[n - 1]]).forward >= 0;
+    for (size_t k = 0; k + 1 < n; ++k)
+      g.inner += (facing(mesh, hits[lo + perm[k]]).forward >= 0) != (facing(mesh, hits[lo + perm[k + 1]]).backward >= 0);
+    out.push_back(g);
+  } while (n > 1 && std::next_permutation(perm.begin(), perm.begin() + n, [&](uint8_t a, uint8_t b) {
+    return hits[lo + a].patch < hits[lo + b].patch;
+  }));
+  return out;
 }
 
 }  // namespace
 
 void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hits) {
-  size_t i = 0;
-  while (i + 1 < hits.size()) {
-    size_t j = i;
-    while (j + 1 < hits.size() && hits[j + 1].t - hits[i].t <= epsilon) ++j;
-    const size_t n = j - i + 1;
-    if (n >= 2 && n <= 5) {
-      std::vector<LineHit> best(hits.begin() + i, hits.begin() + j + 1);
-      std::sort(best.begin(), best.end(), [](const LineHit& a, const LineHit& b) { return a.patch < b.patch; });
-      std::copy(best.begin(), best.end(), hits.begin() + i);
-      int best_cost = mismatches(mesh, hits, i, j);
-      std::vector<LineHit> perm = best;
-      while (best_cost > 0 && std::next_permutation(perm.begin(), perm.end(),
-                                                    [](const LineHit& a, const LineHit& b) { return a.patch < b.patch; })) {
-        std::copy(perm.begin(), perm.end(), hits.begin() + i);
-        const int cost = mismatches(mesh, hits, i, j);
-        if (cost < best_cost) {
-          best_cost = cost;
-          best = perm;
-        }
-      }
-      std::copy(best.begin(), best.end(), hits.begin() + i);
+  // Groups of crossings within epsilon of the group's first one.
+  thread_local std::vector<std::pair<size_t, size_t>> groups;  // (start, size)
+  groups.clear();
+  bool any_tie = false;
+  for (size_t i = 0; i < hits.size();) {
+    size_t j = i + 1;
+    while (j < hits.size() && hits[j].t - hits[i].t <= epsilon) ++j;
+    groups.push_back({i, j - i});
+    any_tie |= j - i > 1;
+    i = j;
+  }
+  if (!any_tie) return;
+
+  // Dynamic programme over the groups; the state is whether the face that the
+  // last crossing so far turns towards the line end is live. Beyond both ends
+  // of the line is empty space, which counts as a black side.
+  constexpr int kInf = 1 << 29;
+  struct Cell {
+    int cost = kInf;
+    int order = -1;       // index into the group's orders
+    int previous = 0;     // state before this group
+  };
+  std::vector<std::vector<GroupOrder>> orders(groups.size());
+  std::vector<std::array<Cell, 2>> dp(groups.size());
+  std::array<int, 2> before{0, kInf};
+  for (size_t g = 0; g < groups.size(); ++g) {
+    const auto [lo, n] = groups[g];
+    if (n <= kMaxTieGroup) {
+      orders[g] = group_orders(mesh, hits, lo, n);
+    } else {  // too many to permute: keep the reported order
+      GroupOrder keep;
+      for (size_t k = 0; k < kMaxTieGroup; ++k) keep.perm[k] = static_cast<uint8_t>(k);
+      keep.first_back_live = facing(mesh, hits[lo]).backward >= 0;
+      keep.last_forward_live = facing(mesh, hits[lo + n - 1]).forward >= 0;
+      orders[g] = {keep};
     }
-    i = j + 1;
+    for (size_t o = 0; o < orders[g].size(); ++o) {
+      const GroupOrder& go = orders[g][o];
+      for (int s = 0; s < 2; ++s) {
+        if (before[s] >= kInf) continue;
+        const int cost = before[s] + (s != static_cast<int>(go.first_back_live)) + go.inner;
+        Cell& cell = dp[g][go.last_forward_live];
+        if (cost < cell.cost) cell = {cost, static_cast<int>(o), s};
+      }
+    }
+    before = {dp[g][0].cost, dp[g][1].cost};
+  }
+  int state = before[0] <= before[1] + 1 ? 0 : 1;
+  thread_local std::vector<LineHit> scratch;
+  for (size_t g = groups.size(); g-- > 0;) {
+    const Cell& cell = dp[g][state];
+    const auto [lo, n] = groups[g];
+    if (n > 1 && n <= kMaxTieGroup) {
+      scratch.assign(hits.begin() + lo, hits.begin() + lo + n);
+      for (size_t k = 0; k < n; ++k) hits[lo + k] = scratch[orders[g][cell.order].perm[k]];
+    }
+    state = cell.previous;
   }
 }
 

@@ -93,6 +93,8 @@ Scene furnace_scene(double rho, double exitance) {
   add_box(scene, {0, 0, 0}, {2, 1.5, 1}, true, m, add_object(scene, "room"));
   add_box(scene, {0.3, 0.4, 0.3}, {0.7, 0.8, 0.6}, false, m, add_object(scene, "floating cube"));
   add_box(scene, {1.2, 0.0, 0.2}, {1.7, 0.6, 0.5}, false, m, add_object(scene, "block on the floor"));
+  // Floor to ceiling in a corner: in contact with four walls along their edges.
+  add_box(scene, {0.0, 1.0, 0.0}, {0.3, 1.5, 1.0}, false, m, add_object(scene, "corner column"));
   return scene;
 }
 

@@ -44,8 +44,9 @@ void add_quad(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c, const V
 // Axis-aligned box; faces point out of it, or into it when `inward`.
 void add_box(Scene& scene, const Vec3& lo, const Vec3& hi, bool inward, int material, int object);
 
-// A closed room 2 x 1.5 x 1 with a floating cube and a block resting on the
-// floor; every surface has reflectance rho and emits exitance `exitance`.
+// A closed room 2 x 1.5 x 1 with a floating cube, a block resting on the
+// floor and a column standing in a corner from floor to ceiling; every
+// surface has reflectance rho and emits exitance `exitance`.
 Scene furnace_scene(double rho, double exitance);
 
 // An in-memory classic solve, the same steps as mpath-solve.

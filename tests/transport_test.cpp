@@ -47,6 +47,31 @@ TEST(OrderTies, PutsTheFloorBeforeTheBlockOnItWhicheverWayTheLineRuns) {
   EXPECT_EQ(down[3].patch, 0);
 }
 
+TEST(OrderTies, KeepsLiveFacesInsideWhenALineOnlyCrossesTwoContacts) {
+  // A column stands on the floor against a wall (x = 0). A line enters through
+  // the wall where the column touches it and leaves through the floor under
+  // the column: both ends must show the walls' black backs to empty space.
+  Scene s;
+  const int m = test::add_material(s, "m", 0.5, 0.0);
+  test::add_quad(s, {0, 0, 0}, {0, 1, 0}, {0, 1, 1}, {0, 0, 1}, m, test::add_object(s, "wall"));   // faces +x
+  test::add_quad(s, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, m, test::add_object(s, "floor"));  // faces +y
+  ASSERT_GT(newell_normal(s.polygons[0].vertices).x, 0);
+  ASSERT_GT(newell_normal(s.polygons[1].vertices).y, 0);
+  test::add_box(s, {0, 0, 0.2}, {0.4, 0.8, 0.6}, false, m, test::add_object(s, "column"));
+  const PatchMesh mesh = build_mesh(s, 10.0);
+  const Tracer tracer(mesh);
+  std::vector<LineHit> hits;
+  const Vec3 dir = normalize(Vec3{0.3, -0.5, 0.05});
+  tracer.all_hits(Vec3{0.1, 0.4, 0.4} - dir * 2.0, dir, 4.0, hits);
+  ASSERT_EQ(hits.size(), 4u);  // two contact pairs and nothing between them
+  order_ties(mesh, 1e-9, hits);
+  auto live_forward = [&](const LineHit& h) { return mesh.patch_faces[h.patch][h.along ? 0 : 1] >= 0; };
+  auto live_backward = [&](const LineHit& h) { return mesh.patch_faces[h.patch][h.along ? 1 : 0] >= 0; };
+  EXPECT_FALSE(live_backward(hits.front()));
+  EXPECT_FALSE(live_forward(hits.back()));
+  for (size_t i = 0; i + 1 < hits.size(); ++i) EXPECT_EQ(live_forward(hits[i]), live_backward(hits[i + 1])) << i;
+}
+
 TEST(Transport, ConservesPowerAlongALineAndAbsorbsAtBlackBacks) {
   const Column c;
   RadiosityState state = make_state(c.scene, c.mesh);
