@@ -24,19 +24,26 @@ std::vector<Vec3> without_repeats(const std::vector<Vec3>& p) {
   return out;
 }
 
+// Unit directions around `axis` at segments + 1 evenly spaced angles (the last equals the first).
+std::vector<Vec3> circle(const Vec3& axis, int segments) {
+  Vec3 u, v;
+  orthonormal_basis(normalize(axis), u, v);
+  std::vector<Vec3> d;
+  for (int i = 0; i <= segments; ++i) {
+    const double a = kTwoPi * (i % segments) / segments;
+    d.push_back(u * std::cos(a) + v * std::sin(a));
+  }
+  return d;
+}
+
 }  // namespace
 
 PolygonList tessellate_cone(Vec3 c1, double r1, Vec3 c2, double r2, int segments, bool inward) {
-  const Vec3 axis = normalize(c2 - c1);
-  Vec3 u, v;
-  orthonormal_basis(axis, u, v);
+  const std::vector<Vec3> d = circle(c2 - c1, segments);
   PolygonList out;
   for (int i = 0; i < segments; ++i) {
-    const double a0 = kTwoPi * i / segments, a1 = kTwoPi * (i + 1) / segments;
-    const Vec3 d0 = u * std::cos(a0) + v * std::sin(a0);
-    const Vec3 d1 = u * std::cos(a1) + v * std::sin(a1);
     // Counter-clockwise seen from outside: bottom edge forward, top edge back.
-    std::vector<Vec3> quad{c1 + d0 * r1, c1 + d1 * r1, c2 + d1 * r2, c2 + d0 * r2};
+    std::vector<Vec3> quad{c1 + d[i] * r1, c1 + d[i + 1] * r1, c2 + d[i + 1] * r2, c2 + d[i] * r2};
     out.push_back(oriented(without_repeats(quad), inward));
   }
   return out;
@@ -59,15 +66,10 @@ PolygonList tessellate_sphere(Vec3 c, double r, int segments, bool inward) {
 }
 
 PolygonList tessellate_ring(Vec3 c, Vec3 normal, double r_in, double r_out, int segments) {
-  const Vec3 n = normalize(normal);
-  Vec3 u, v;
-  orthonormal_basis(n, u, v);
+  const std::vector<Vec3> d = circle(normal, segments);
   PolygonList out;
   for (int i = 0; i < segments; ++i) {
-    const double a0 = kTwoPi * i / segments, a1 = kTwoPi * (i + 1) / segments;
-    const Vec3 d0 = u * std::cos(a0) + v * std::sin(a0);
-    const Vec3 d1 = u * std::cos(a1) + v * std::sin(a1);
-    out.push_back(without_repeats({c + d0 * r_in, c + d0 * r_out, c + d1 * r_out, c + d1 * r_in}));
+    out.push_back(without_repeats({c + d[i] * r_in, c + d[i] * r_out, c + d[i + 1] * r_out, c + d[i + 1] * r_in}));
   }
   return out;
 }

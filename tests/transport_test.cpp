@@ -72,18 +72,28 @@ TEST(OrderTies, KeepsLiveFacesInsideWhenALineOnlyCrossesTwoContacts) {
   for (size_t i = 0; i + 1 < hits.size(); ++i) EXPECT_EQ(live_forward(hits[i]), live_backward(hits[i + 1])) << i;
 }
 
-TEST(Transport, ConservesPowerAlongALineAndAbsorbsAtBlackBacks) {
-  const Column c;
-  RadiosityState state = make_state(c.scene, c.mesh);
+// A pass over the column with nothing to send yet and `share` per crossing.
+struct ColumnPass {
+  Column c;
+  RadiosityState state;
   PassInputs in;
-  in.state = &state;
-  in.mesh = &c.mesh;
-  in.quota.assign(state.faces, 0.0);
-  in.share.assign(state.faces, 0.25);
+  ShardAccumulator acc;
+  explicit ColumnPass(double share) : state(make_state(c.scene, c.mesh)) {
+    in.state = &state;
+    in.mesh = &c.mesh;
+    in.quota.assign(state.faces, 0.0);
+    in.share.assign(state.faces, share);
+    acc.reset(state.faces, state.channels);
+  }
+};
+
+TEST(Transport, ConservesPowerAlongALineAndAbsorbsAtBlackBacks) {
+  ColumnPass pass(0.25);
+  const Column& c = pass.c;
+  PassInputs& in = pass.in;
+  ShardAccumulator& acc = pass.acc;
   in.quota[2] = 8.0;  // the block top has 8 W to send, 2 W per crossing
   in.quota[3] = 4.0;  // the ceiling 4 W, 1 W per crossing
-  ShardAccumulator acc;
-  acc.reset(state.faces, state.channels);
   const Vec3 up{0, 1, 0};
   const std::vector<LineHit> hits = crossings(c.mesh, up, {{0.0, 0}, {0.0, 1}, {1.0, 2}, {2.0, 3}});
   transport_line(in, hits, acc);
@@ -107,17 +117,11 @@ TEST(Transport, ConservesPowerAlongALineAndAbsorbsAtBlackBacks) {
 }
 
 TEST(Transport, PowerLeavingTheEndsOfALineEscapes) {
-  const Column c;
-  RadiosityState state = make_state(c.scene, c.mesh);
-  PassInputs in;
-  in.state = &state;
-  in.mesh = &c.mesh;
-  in.quota.assign(state.faces, 0.0);
-  in.share.assign(state.faces, 1.0);
+  ColumnPass pass(1.0);
+  PassInputs& in = pass.in;
+  ShardAccumulator& acc = pass.acc;
   in.quota[2] = 3.0;
-  ShardAccumulator acc;
-  acc.reset(state.faces, state.channels);
-  const std::vector<LineHit> top = crossings(c.mesh, {0, 1, 0}, {{1.0, 2}});  // only the block top on this line
+  const std::vector<LineHit> top = crossings(pass.c.mesh, {0, 1, 0}, {{1.0, 2}});  // only the block top on this line
   transport_line(in, top, acc);
   EXPECT_DOUBLE_EQ(acc.escaped[0], 3.0);
   // A shard never sends more than its allowance of a quota.
