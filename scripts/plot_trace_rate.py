@@ -25,7 +25,7 @@ def main(stem, paths):
         r["cpu"] = cpu_model()
     with open(stem + ".json", "w") as f:
         json.dump(records, f, indent=2)
-    fields = ["scene", "patches", "lines", "threads", "sequence", "raw_lines_per_s", "solver_lines_per_s", "ratio",
+    fields = ["scene", "patches", "lines", "threads", "sequence", "raw_lines_per_s", "tracer_lines_per_s", "solver_lines_per_s", "ratio",
               "raw_hits_per_line", "commit", "cpu"]
     with open(stem + ".csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
@@ -37,15 +37,17 @@ def main(stem, paths):
     fig, ax = plt.subplots(figsize=(6, 3.5))
     names = [r["scene"] for r in records]
     x = range(len(records))
-    ax.bar([i - 0.2 for i in x], [r["raw_lines_per_s"] / 1e6 for r in records], 0.4, label="Embree raw all-hit")
-    ax.bar([i + 0.2 for i in x], [r["solver_lines_per_s"] / 1e6 for r in records], 0.4, label="classic solver pass")
+    ax.bar([i - 0.27 for i in x], [r["raw_lines_per_s"] / 1e6 for r in records], 0.27, label="Embree raw all-hit")
+    ax.bar([i for i in x], [r["tracer_lines_per_s"] / 1e6 for r in records], 0.27, label="mpath tracer (sorted, ties ordered)")
+    ax.bar([i + 0.27 for i in x], [r["solver_lines_per_s"] / 1e6 for r in records], 0.27, label="classic solver pass")
     for i, r in enumerate(records):
-        ax.text(i + 0.2, r["solver_lines_per_s"] / 1e6, f"{100 * r['ratio']:.0f}%", ha="center", va="bottom")
+        ax.text(i + 0.27, r["solver_lines_per_s"] / 1e6, f"{100 * r['ratio']:.0f}%", ha="center", va="bottom")
     ax.set_xticks(list(x))
     ax.set_xticklabels(names)
     ax.set_ylabel("million lines / s")
     ax.set_title(f"Global lines, {records[0]['threads']} threads, commit {records[0]['commit']}")
-    ax.legend(loc="lower right")
+    ax.set_ylim(0, 1.5 * max(r["raw_lines_per_s"] / 1e6 for r in records))
+    ax.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
     figure = os.path.join(os.path.dirname(stem), "..", "figures", os.path.basename(stem) + ".png")
     fig.savefig(figure, dpi=120)
