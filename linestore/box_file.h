@@ -1,0 +1,83 @@
+// One file of stored lines of one box (docs/store-format.md): a header, zstd
+// frames of encoded lines (chunks, each with its checksum), a zstd frame of
+// crossing counts, and an index that lets readers seek to any chunk.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "line_record.h"
+
+namespace mpath::linestore {
+
+inline constexpr uint32_t kFormatVersion = 1;
+
+// Where a store file is written before it is complete: a hidden name beside it.
+std::filesystem::path partial_path(const std::filesystem::path& path);
+
+struct ChunkInfo {
+  uint64_t offset = 0;      // of the zstd frame in the file
+  uint64_t bytes = 0;       // compressed
+  uint64_t raw_bytes = 0;   // encoded lines before compression
+  uint64_t first_line = 0;  // global index of its first line
+  uint64_t lines = 0;
+  uint64_t events = 0;
+};
+
+// An encoded, compressed chunk ready to be written (made in any thread).
+struct EncodedChunk {
+  std::string frame;  // zstd frame
+  ChunkInfo info;     // offset filled in by the writer
+};
+
+// Encodes and compresses lines [first_line, first_line + lines.size()).
+EncodedChunk encode_chunk(const std::vector<LineRecord>& lines, uint64_t first_line, int level);
+
+// Writes a box file under a temporary name; `finish` renames it into place.
+class BoxFileWriter {
+ public:
+  BoxFileWriter(const std::filesystem::path& path, uint32_t box);
+  ~BoxFileWriter();
+  void write(const EncodedChunk& chunk);
+  // Per-face crossing counts of the file's lines, then the index; renames.
+  void finish(const std::vector<uint32_t>& face_crossings);
+
+ private:
+  void put(const void* data, size_t size);
+  std::filesystem::path path_, temp_;
+  std::ofstream out_;
+  uint32_t box_;
+  uint64_t offset_ = 0;
+  std::vector<ChunkInfo> chunks_;
+  bool finished_ = false;
+};
+
+// Reads a box file: header, index and counts at open; chunks on demand, each
+// decompressed, checksum-verified and decoded. Errors name the file and chunk.
+class BoxFileReader {
+ public:
+  explicit BoxFileReader(const std::filesystem::path& path);
+  uint32_t box() const { return box_; }
+  const std::vector<ChunkInfo>& chunks() const { return chunks_; }
+  const std::vector<uint32_t>& face_crossings() const { return face_crossings_; }
+  uint64_t lines() const;
+  uint64_t events() const;
+  void read_chunk(size_t index, DecodedChunk& out);
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const;
+  std::string read_frame(uint64_t offset, uint64_t bytes, uint64_t raw_bytes, const std::string& what);
+
+  std::filesystem::path path_;
+  std::ifstream in_;
+  uint64_t size_ = 0;
+  uint32_t box_ = 0;
+  std::vector<ChunkInfo> chunks_;
+  std::vector<uint32_t> face_crossings_;
+  std::string compressed_, raw_;
+};
+
+}  // namespace mpath::linestore

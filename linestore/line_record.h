@@ -1,0 +1,50 @@
+// The record of one stored line, in order along the line (design.md section 5):
+// the AR of its box's wall where it enters, its events (patch crossings with
+// the side facing forward; child-box crossings with entry and exit ARs), and
+// the AR where it leaves. The root box's lines have no wall ARs.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mpath::linestore {
+
+inline constexpr uint32_t kNoAr = 0xFFFFFFFFu;
+
+struct Event {
+  enum Kind : uint8_t { patch = 0, child_box = 1 };
+  Kind kind = patch;
+  uint32_t id = 0;          // patch index, or child index within the box
+  bool along = false;       // patch: its front faces along the line
+  uint32_t entry_ar = kNoAr;  // child box: AR where the line enters it
+  uint32_t exit_ar = kNoAr;   // and where it leaves
+
+  bool operator==(const Event&) const = default;
+};
+
+struct LineRecord {
+  uint32_t entry_ar = kNoAr;
+  uint32_t exit_ar = kNoAr;
+  std::vector<Event> events;
+
+  bool operator==(const LineRecord&) const = default;
+};
+
+// Appends the encoding of `line` to `out` (docs/store-format.md).
+void encode_line(const LineRecord& line, std::string& out);
+
+// Lines of a decoded chunk, flat: line i's events are events[first[i] .. first[i+1]).
+struct DecodedChunk {
+  std::vector<uint32_t> first;  // size lines + 1
+  std::vector<uint32_t> entry_ar, exit_ar;
+  std::vector<Event> events;
+
+  size_t lines() const { return first.empty() ? 0 : first.size() - 1; }
+  void clear();
+};
+
+// Decodes `lines` records from `data`; false if the bytes do not hold exactly that.
+bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, DecodedChunk& out);
+
+}  // namespace mpath::linestore

@@ -1,0 +1,80 @@
+#include "manifest.h"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "box_file.h"
+#include "error.h"
+
+namespace mpath::linestore {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+void write_manifest(const fs::path& path, const Manifest& m) {
+  json files = json::array();
+  for (const StoreFile& f : m.files)
+    files.push_back({{"name", f.name}, {"box", f.box}, {"first_line", f.first_line}, {"lines", f.lines},
+                     {"events", f.events}, {"chunks", f.chunks}, {"bytes", f.bytes}, {"hash", f.hash}});
+  const json j = {{"format_version", m.format_version}, {"mpath_version", m.mpath_version},
+                  {"identity", m.identity},             {"patches", m.patches},
+                  {"faces", m.faces},                   {"lines_total", m.lines_total},
+                  {"chunk_lines", m.chunk_lines},       {"files", files}};
+  const fs::path temp = partial_path(path);
+  {
+    std::ofstream out(temp, std::ios::trunc);
+    out << j.dump(2) << "\n";
+    out.close();
+    if (out.fail()) {
+      std::error_code ec;
+      fs::remove(temp, ec);
+      throw InputError(fmt::format("{}: writing failed (disk full?)", path.string()));
+    }
+  }
+  std::error_code ec;
+  fs::rename(temp, path, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot move finished file into place: {}", path.string(), ec.message()));
+}
+
+Manifest read_manifest(const fs::path& path) {
+  if (!fs::exists(path))
+    throw InputError(fmt::format("{}: missing; run mpath-preprocess with this config first", path.string()));
+  std::ifstream in(path);
+  json j;
+  try {
+    j = json::parse(in);
+    Manifest m;
+    m.format_version = j.at("format_version").get<uint32_t>();
+    if (m.format_version != kFormatVersion)
+      throw InputError(fmt::format("{}: store format version {} (this mpath reads version {}); re-run mpath-preprocess",
+                                   path.string(), m.format_version, kFormatVersion));
+    m.mpath_version = j.at("mpath_version").get<std::string>();
+    m.identity = j.at("identity").get<std::map<std::string, std::string>>();
+    m.patches = j.at("patches").get<uint64_t>();
+    m.faces = j.at("faces").get<uint64_t>();
+    m.lines_total = j.at("lines_total").get<uint64_t>();
+    m.chunk_lines = j.at("chunk_lines").get<uint64_t>();
+    for (const json& f : j.at("files"))
+      m.files.push_back({f.at("name").get<std::string>(), f.at("box").get<uint32_t>(), f.at("first_line").get<uint64_t>(),
+                         f.at("lines").get<uint64_t>(), f.at("events").get<uint64_t>(), f.at("chunks").get<uint64_t>(),
+                         f.at("bytes").get<uint64_t>(), f.at("hash").get<std::string>()});
+    return m;
+  } catch (const json::exception& e) {
+    throw InputError(fmt::format("{}: malformed manifest: {}", path.string(), e.what()));
+  }
+}
+
+std::string identity_mismatch(const std::map<std::string, std::string>& expected,
+                              const std::map<std::string, std::string>& found) {
+  for (const auto& [key, value] : expected) {
+    auto it = found.find(key);
+    if (it == found.end()) return fmt::format("{}: the store does not record it", key);
+    if (it->second != value) return fmt::format("{}: the store was made with {}, this run has {}", key, it->second, value);
+  }
+  for (const auto& [key, value] : found)
+    if (!expected.count(key)) return fmt::format("{}: the store records {}, which this run does not know", key, value);
+  return "";
+}
+
+}  // namespace mpath::linestore

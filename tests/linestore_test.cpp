@@ -1,0 +1,161 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <random>
+
+#include "box_file.h"
+#include "error.h"
+#include "manifest.h"
+#include "test_util.h"
+
+namespace mpath::linestore {
+namespace {
+
+using test::TempDir;
+
+std::vector<LineRecord> random_lines(size_t count, std::mt19937& rng) {
+  std::uniform_int_distribution<uint32_t> id(0, 5'000'000), events(0, 12), coin(0, 1), ar(0, 24 * 64 * 6 - 1);
+  std::vector<LineRecord> lines(count);
+  for (LineRecord& l : lines) {
+    if (coin(rng)) {
+      l.entry_ar = ar(rng);
+      l.exit_ar = ar(rng);
+    }
+    for (uint32_t k = events(rng); k > 0; --k) {
+      Event e;
+      e.id = id(rng);
+      e.along = coin(rng);
+      if (coin(rng) && coin(rng)) {
+        e.kind = Event::child_box;
+        e.along = false;
+        e.entry_ar = ar(rng);
+        e.exit_ar = ar(rng);
+      }
+      l.events.push_back(e);
+    }
+  }
+  return lines;
+}
+
+std::vector<LineRecord> records(const DecodedChunk& c) {
+  std::vector<LineRecord> out(c.lines());
+  for (size_t i = 0; i < c.lines(); ++i) {
+    out[i].entry_ar = c.entry_ar[i];
+    out[i].exit_ar = c.exit_ar[i];
+    out[i].events.assign(c.events.begin() + c.first[i], c.events.begin() + c.first[i + 1]);
+  }
+  return out;
+}
+
+// Writes a file of `chunks` chunks of 1000 random lines; returns the lines.
+std::vector<std::vector<LineRecord>> write_box(const std::filesystem::path& path, int chunks, std::vector<uint32_t> counts) {
+  std::mt19937 rng(42);
+  BoxFileWriter writer(path, 3);
+  std::vector<std::vector<LineRecord>> all;
+  for (int c = 0; c < chunks; ++c) {
+    all.push_back(random_lines(1000, rng));
+    writer.write(encode_chunk(all.back(), 1000ull * c, 3));
+  }
+  writer.finish(counts);
+  return all;
+}
+
+TEST(LineStore, RoundTripsRandomLineRecords) {
+  TempDir dir;
+  const std::vector<uint32_t> counts{0, 7, 4'000'000'000u, 12};
+  const auto written = write_box(dir / "box.lines", 4, counts);
+  BoxFileReader reader(dir / "box.lines");
+  EXPECT_EQ(reader.box(), 3u);
+  EXPECT_EQ(reader.lines(), 4000u);
+  EXPECT_EQ(reader.face_crossings(), counts);
+  ASSERT_EQ(reader.chunks().size(), 4u);
+  DecodedChunk chunk;
+  for (size_t c = 0; c < 4; ++c) {
+    EXPECT_EQ(reader.chunks()[c].first_line, 1000 * c);
+    reader.read_chunk(c, chunk);
+    EXPECT_EQ(records(chunk), written[c]) << "chunk " << c;
+  }
+  EXPECT_FALSE(std::filesystem::exists(partial_path(dir / "box.lines")));
+}
+
+std::string open_error(const std::filesystem::path& path, int chunk = -1) {
+  try {
+    BoxFileReader reader(path);
+    DecodedChunk c;
+    for (size_t i = 0; i < reader.chunks().size(); ++i)
+      if (chunk < 0 || static_cast<int>(i) == chunk) reader.read_chunk(i, c);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+void patch_file(const std::filesystem::path& path, uint64_t offset, const std::string& bytes) {
+  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+  f.seekp(static_cast<std::streamoff>(offset));
+  f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+TEST(LineStore, NamesTheFileAndChunkOfAFlippedByte) {
+  TempDir dir;
+  write_box(dir / "box.lines", 3, {1, 2});
+  const ChunkInfo second = BoxFileReader(dir / "box.lines").chunks()[1];
+  std::string byte(1, '\0');
+  {
+    std::ifstream in(dir / "box.lines", std::ios::binary);
+    in.seekg(static_cast<std::streamoff>(second.offset + second.bytes / 2));
+    in.read(byte.data(), 1);
+  }
+  byte[0] = static_cast<char>(byte[0] ^ 0x10);
+  patch_file(dir / "box.lines", second.offset + second.bytes / 2, byte);
+  const std::string e = open_error(dir / "box.lines");
+  EXPECT_NE(e.find("box.lines: chunk 1: corrupted"), std::string::npos) << e;
+  EXPECT_EQ(open_error(dir / "box.lines", 0), "");  // the other chunks still read
+}
+
+TEST(LineStore, NamesTruncatedForeignAndOtherVersionFiles) {
+  TempDir dir;
+  write_box(dir / "box.lines", 2, {1});
+  const auto size = std::filesystem::file_size(dir / "box.lines");
+  std::filesystem::copy_file(dir / "box.lines", dir / "short.lines");
+  std::filesystem::resize_file(dir / "short.lines", size - 100);
+  EXPECT_NE(open_error(dir / "short.lines").find("short.lines: truncated"), std::string::npos) << open_error(dir / "short.lines");
+  std::filesystem::resize_file(dir / "short.lines", 10);
+  EXPECT_NE(open_error(dir / "short.lines").find("truncated"), std::string::npos);
+
+  test::write_file(dir / "foreign.lines", std::string(200, 'x'));
+  EXPECT_NE(open_error(dir / "foreign.lines").find("not an mpath line file"), std::string::npos);
+
+  std::filesystem::copy_file(dir / "box.lines", dir / "v9.lines");
+  patch_file(dir / "v9.lines", 8, std::string("\x09\0\0\0", 4));
+  EXPECT_NE(open_error(dir / "v9.lines").find("store format version 9 (this mpath reads version 1"), std::string::npos);
+  EXPECT_NE(open_error(dir / "missing.lines").find("missing.lines: missing"), std::string::npos);
+}
+
+TEST(Manifest, RoundTripsAndNamesTheFirstMismatch) {
+  TempDir dir;
+  Manifest m;
+  m.format_version = kFormatVersion;
+  m.identity = {{"lines.total", "1000"}, {"mesh.hash", "abc"}};
+  m.files.push_back({"box0000.lines", 0, 0, 1000, 2500, 1, 12345, "0123456789abcdef"});
+  write_manifest(dir / "manifest.json", m);
+  const Manifest back = read_manifest(dir / "manifest.json");
+  EXPECT_EQ(back.identity, m.identity);
+  ASSERT_EQ(back.files.size(), 1u);
+  EXPECT_EQ(back.files[0].hash, "0123456789abcdef");
+  EXPECT_EQ(identity_mismatch(m.identity, back.identity), "");
+  auto other = m.identity;
+  other["lines.total"] = "2000";
+  EXPECT_EQ(identity_mismatch(other, back.identity), "lines.total: the store was made with 1000, this run has 2000");
+  test::write_file(dir / "bad.json", "{\"format_version\": 1");
+  EXPECT_THROW(read_manifest(dir / "bad.json"), InputError);
+  try {
+    read_manifest(dir / "none.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("run mpath-preprocess"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace mpath::linestore
