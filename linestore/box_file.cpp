@@ -56,31 +56,27 @@ fs::path partial_path(const fs::path& path) {
   return path.parent_path() / name;
 }
 
-std::string hex64(uint64_t v) { return fmt::format("{:016x}", v); }
-
-std::string hash_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot read file", path.string()));
-  Fnv1a h;
-  std::string buffer(1 << 20, '\0');
-  while (in) {
-    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-    h.add(buffer.data(), static_cast<size_t>(in.gcount()));
-  }
-  return hex64(h.value());
-}
-
-EncodedChunk encode_chunk(const std::vector<LineRecord>& lines, uint64_t first_line, int level) {
+std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events) {
   std::string raw;
-  uint64_t events = 0;
+  events = 0;
   for (const LineRecord& l : lines) {
     encode_line(l, raw);
     events += l.events.size();
   }
+  return raw;
+}
+
+EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_t lines, uint64_t events, int level) {
   EncodedChunk c;
   c.frame = compress(raw, level);
-  c.info = {0, c.frame.size(), raw.size(), first_line, lines.size(), events};
+  c.info = {0, c.frame.size(), raw.size(), first_line, lines, events};
   return c;
+}
+
+EncodedChunk encode_chunk(const std::vector<LineRecord>& lines, uint64_t first_line, int level) {
+  uint64_t events = 0;
+  const std::string raw = encode_lines(lines, events);
+  return compress_chunk(raw, first_line, lines.size(), events, level);
 }
 
 BoxFileWriter::BoxFileWriter(const fs::path& path, uint32_t box)

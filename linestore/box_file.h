@@ -35,6 +35,9 @@ struct EncodedChunk {
 
 // Encodes and compresses lines [first_line, first_line + lines.size()).
 EncodedChunk encode_chunk(const std::vector<LineRecord>& lines, uint64_t first_line, int level);
+// The two steps apart, for callers that time them.
+std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events);
+EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_t lines, uint64_t events, int level);
 
 // Writes a box file under a temporary name; `finish` renames it into place.
 class BoxFileWriter {

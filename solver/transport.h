@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "radiosity_state.h"
+#include "line_order.h"
 #include "tracer.h"
 
 namespace mpath {
@@ -43,11 +44,6 @@ struct ShardAccumulator {
 // Power arriving at `face` (-1: a black back side): rho of it is kept as
 // accumulated and unshot power, the rest absorbed.
 void receive(const RadiosityState& state, int face, const double* power, ShardAccumulator& acc);
-
-// Reorders crossings at equal distance so that, where some order allows, a
-// live face is never paired with a black back side (objects resting on
-// surfaces, back-to-back walls).
-void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hits);
 
 // One line in both directions: every face on it sends its per-line share of
 // its quota plus what it gathered earlier in the pass; all sends are taken

@@ -202,6 +202,8 @@ const std::map<std::string, Setter>& setters() {
       {"solver.tolerance", [](auto& n, auto& s, Options& o) { o.solver.tolerance = in_range(get_number(n, s), 0.0, 1.0, s); }},
       {"solver.threads", [](auto& n, auto& s, Options& o) { o.solver.threads = static_cast<int>(in_range(get_integer(n, s), 0, 4096, s)); }},
       {"store.dir", [](auto& n, auto& s, Options& o) { o.store.dir = get_path(n, s); }},
+      {"store.chunk_lines", [](auto& n, auto& s, Options& o) { o.store.chunk_lines = static_cast<int>(in_range(get_integer(n, s), 256, 1 << 24, s)); }},
+      {"store.zstd_level", [](auto& n, auto& s, Options& o) { o.store.zstd_level = static_cast<int>(in_range(get_integer(n, s), 1, 19, s)); }},
       {"output.dir", [](auto& n, auto& s, Options& o) { o.output.dir = get_path(n, s); }},
       {"output.exr", [](auto& n, auto& s, Options& o) { o.output.exr = get_bool(n, s); }},
       {"output.png", [](auto& n, auto& s, Options& o) { o.output.png = get_bool(n, s); }},
@@ -309,7 +311,8 @@ toml::table options_table(const Options& o) {
                                  {"mode", o.first_shot.mode}}},
       {"solver", toml::table{{"method", o.solver.method}, {"iterations", o.solver.iterations},
                              {"tolerance", o.solver.tolerance}, {"threads", o.solver.threads}}},
-      {"store", toml::table{{"dir", o.store.dir.string()}}},
+      {"store", toml::table{{"dir", o.store.dir.string()}, {"chunk_lines", o.store.chunk_lines},
+                            {"zstd_level", o.store.zstd_level}}},
       {"output", toml::table{{"dir", o.output.dir.string()}, {"exr", o.output.exr}, {"png", o.output.png}}},
   };
   if (!cameras.empty()) t.insert("camera", cameras);

@@ -73,6 +73,8 @@ struct Options {
 
   struct Store {
     std::filesystem::path dir = "store";
+    int chunk_lines = 65536;  // lines per compressed chunk
+    int zstd_level = 6;       // zstd compression level of chunks
   } store;
 
   struct Output {

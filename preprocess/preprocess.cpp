@@ -1,0 +1,199 @@
+#include "preprocess.h"
+
+#include <spdlog/spdlog.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_pipeline.h>
+
+#include <atomic>
+#include <chrono>
+#include <nlohmann/json.hpp>
+
+#include "box_file.h"
+#include "error.h"
+#include "hash.h"
+#include "line_tracing.h"
+#include "manifest.h"
+#include "mpath_version.h"
+#include "prepared_scene.h"
+#include "progress.h"
+#include "store_identity.h"
+
+namespace mpath {
+
+namespace fs = std::filesystem;
+using clock = std::chrono::steady_clock;
+
+ShardSpec parse_shard(const std::string& text) {
+  ShardSpec s;
+  char slash = 0;
+  std::istringstream in(text);
+  if (!(in >> s.index >> slash >> s.count) || slash != '/' || !in.eof() || s.count < 1 || s.index < 1 ||
+      s.index > s.count)
+    throw InputError(fmt::format("--shard: expected i/n with 1 <= i <= n, got '{}'", text));
+  return s;
+}
+
+namespace {
+
+double seconds(clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+std::string file_name(const ShardSpec& shard) {
+  if (shard.count == 1) return "box0000.lines";
+  return fmt::format("box0000.part{:04}of{:04}.lines", shard.index, shard.count);
+}
+
+fs::path part_manifest(const fs::path& dir, const ShardSpec& shard) {
+  return dir / fmt::format("part{:04}of{:04}.json", shard.index, shard.count);
+}
+
+linestore::Manifest base_manifest(const Options& options, const PatchMesh& mesh,
+                                  const std::map<std::string, std::string>& identity) {
+  linestore::Manifest m;
+  m.format_version = linestore::kFormatVersion;
+  m.mpath_version = fmt::format("{} ({})", MPATH_VERSION, MPATH_GIT_COMMIT);
+  m.identity = identity;
+  m.patches = mesh.patches.size();
+  m.faces = mesh.face_count();
+  m.lines_total = static_cast<uint64_t>(options.lines.total);
+  m.chunk_lines = static_cast<uint64_t>(options.store.chunk_lines);
+  return m;
+}
+
+// True when a shard's file and its record exist, match this run and verify.
+bool finished_and_verified(const fs::path& record, const fs::path& dir,
+                           const std::map<std::string, std::string>& identity) {
+  if (!fs::exists(record)) return false;
+  try {
+    const linestore::Manifest m = linestore::read_manifest(record);
+    if (!linestore::identity_mismatch(identity, m.identity).empty() || m.files.size() != 1) return false;
+    const fs::path file = dir / m.files[0].name;
+    return fs::exists(file) && fs::file_size(file) == m.files[0].bytes && hash_file(file) == m.files[0].hash;
+  } catch (const InputError&) {
+    return false;
+  }
+}
+
+// When every part of a sharded store is there and matches, writes manifest.json.
+bool merge_parts(const fs::path& dir, const ShardSpec& shard, linestore::Manifest merged) {
+  for (int i = 1; i <= shard.count; ++i) {
+    const fs::path record = part_manifest(dir, {i, shard.count});
+    if (!fs::exists(record)) return false;
+    const linestore::Manifest part = linestore::read_manifest(record);
+    if (!linestore::identity_mismatch(merged.identity, part.identity).empty()) return false;
+    merged.files.insert(merged.files.end(), part.files.begin(), part.files.end());
+  }
+  linestore::write_manifest(dir / "manifest.json", merged);
+  return true;
+}
+
+}  // namespace
+
+PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, bool dry_run) {
+  const auto start = clock::now();
+  const int threads = effective_threads(options);
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  spdlog::info("mpath-preprocess {} ({}), shard {}/{}, {} thread(s)", MPATH_VERSION, MPATH_GIT_COMMIT, shard.index,
+               shard.count, threads);
+  PreparedScene prepared = prepare_scene(options);
+  const PatchMesh& mesh = prepared.mesh;
+  PreprocessStats stats;
+  if (dry_run) return stats;
+
+  const fs::path dir = options.store.dir;
+  fs::create_directories(dir);
+  const auto identity = store_identity(options, mesh);
+  const linestore::Manifest base = base_manifest(options, mesh, identity);
+  const fs::path record = shard.count == 1 ? dir / "manifest.json" : part_manifest(dir, shard);
+  if (finished_and_verified(record, dir, identity)) {
+    spdlog::info("{}: finished and verified earlier, not traced again", (dir / file_name(shard)).string());
+    stats.skipped = true;
+    if (shard.count > 1) stats.manifest_written = merge_parts(dir, shard, base);
+    return stats;
+  }
+  // The store is incomplete from now until this run's manifest is written.
+  std::error_code ec;
+  fs::remove(dir / "manifest.json", ec);
+  fs::remove(record, ec);
+
+  const Tracer tracer(mesh);
+  const ChunkTracer chunks(options, mesh, tracer);
+  const uint64_t lo = chunks.chunk_count() * (shard.index - 1) / shard.count;
+  const uint64_t hi = chunks.chunk_count() * shard.index / shard.count;
+  uint64_t shard_lines = 0;
+  for (uint64_t c = lo; c < hi; ++c) shard_lines += chunks.lines_in(c);
+
+  const fs::path path = dir / file_name(shard);
+  linestore::BoxFileWriter writer(path, 0);
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> crossings(std::vector<uint32_t>(mesh.face_count(), 0));
+  std::atomic<uint64_t> trace_ns{0}, encode_ns{0}, compress_ns{0};
+  auto ns = [](clock::duration d) { return static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(d).count()); };
+  Progress progress(fmt::format("tracing {}", path.filename().string()), shard_lines, "lines", true);
+  uint64_t next = lo;
+  double write_seconds = 0;
+  tbb::parallel_pipeline(
+      static_cast<size_t>(2 * threads),
+      tbb::make_filter<void, uint64_t>(tbb::filter_mode::serial_in_order,
+                                       [&](tbb::flow_control& fc) -> uint64_t {
+                                         if (next >= hi) {
+                                           fc.stop();
+                                           return 0;
+                                         }
+                                         return next++;
+                                       }) &
+          tbb::make_filter<uint64_t, linestore::EncodedChunk>(
+              tbb::filter_mode::parallel,
+              [&](uint64_t c) {
+                std::vector<linestore::LineRecord> records;
+                auto t0 = clock::now();
+                chunks.trace(c, records, crossings.local());
+                auto t1 = clock::now();
+                uint64_t events = 0;
+                const std::string raw = linestore::encode_lines(records, events);
+                auto t2 = clock::now();
+                linestore::EncodedChunk out =
+                    linestore::compress_chunk(raw, chunks.first_line(c), records.size(), events, options.store.zstd_level);
+                auto t3 = clock::now();
+                trace_ns += ns(t1 - t0);
+                encode_ns += ns(t2 - t1);
+                compress_ns += ns(t3 - t2);
+                return out;
+              }) &
+          tbb::make_filter<linestore::EncodedChunk, void>(tbb::filter_mode::serial_in_order,
+                                                          [&](const linestore::EncodedChunk& chunk) {
+                                                            auto t0 = clock::now();
+                                                            writer.write(chunk);
+                                                            write_seconds += seconds(clock::now() - t0);
+                                                            stats.lines += chunk.info.lines;
+                                                            stats.events += chunk.info.events;
+                                                            stats.raw_bytes += chunk.info.raw_bytes;
+                                                            progress.advance(chunk.info.lines);
+                                                          }));
+  progress.finish();
+  std::vector<uint32_t> total(mesh.face_count(), 0);
+  for (const auto& local : crossings)
+    for (size_t f = 0; f < total.size(); ++f) total[f] += local[f];
+  auto t0 = clock::now();
+  writer.finish(total);
+  write_seconds += seconds(clock::now() - t0);
+
+  linestore::Manifest m = base;
+  m.files.push_back({path.filename().string(), 0, chunks.first_line(lo), stats.lines, stats.events, hi - lo,
+                     fs::file_size(path), hash_file(path)});
+  linestore::write_manifest(record, m);
+  stats.manifest_written = shard.count == 1 || merge_parts(dir, shard, base);
+  stats.bytes = fs::file_size(path);
+  stats.trace_seconds = trace_ns * 1e-9;
+  stats.encode_seconds = encode_ns * 1e-9;
+  stats.compress_seconds = compress_ns * 1e-9;
+  stats.write_seconds = write_seconds;
+  stats.wall_seconds = seconds(clock::now() - start);
+  spdlog::info("{}: {} lines, {} events, {:.3f} bytes/event on disk ({:.2f} before compression), {:.1f} MB",
+               path.string(), stats.lines, stats.events, stats.events ? double(stats.bytes) / stats.events : 0.0,
+               stats.events ? double(stats.raw_bytes) / stats.events : 0.0, stats.bytes / 1e6);
+  if (shard.count > 1 && !stats.manifest_written)
+    spdlog::info("store not complete yet: manifest.json is written when every shard of {} has finished", shard.count);
+  return stats;
+}
+
+}  // namespace mpath

@@ -1,0 +1,30 @@
+// mpath-preprocess as a library call: mesh the scene, trace the stored lines
+// and write the store (manifest and box files) in store.dir.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "config.h"
+
+namespace mpath {
+
+struct ShardSpec {
+  int index = 1;  // 1-based
+  int count = 1;
+};
+
+// Parses "i/n" (1 <= i <= n); throws InputError otherwise.
+ShardSpec parse_shard(const std::string& text);
+
+struct PreprocessStats {
+  uint64_t lines = 0, events = 0, bytes = 0, raw_bytes = 0;
+  double trace_seconds = 0, encode_seconds = 0, compress_seconds = 0, write_seconds = 0;  // summed over threads
+  double wall_seconds = 0;
+  bool skipped = false;  // the shard's file was already finished and verified
+  bool manifest_written = false;
+};
+
+PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, bool dry_run = false);
+
+}  // namespace mpath

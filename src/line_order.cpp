@@ -1,0 +1,103 @@
+#include "line_order.h"
+
+#include <algorithm>
+#include <array>
+
+namespace mpath {
+namespace {
+
+// Orders of one group of crossings at equal distance and what they cost.
+struct GroupOrder {
+  std::array<uint8_t, 5> perm{};  // offsets into the group
+  bool first_back_live = false;   // the first crossing's face towards the line start
+  bool last_forward_live = false; // the last crossing's face towards the line end
+  int inner = 0;                  // live/black pairs inside the group
+};
+
+constexpr size_t kMaxTieGroup = 5;
+
+std::vector<GroupOrder> group_orders(const PatchMesh& mesh, const std::vector<LineHit>& hits, size_t lo, size_t n) {
+  std::array<uint8_t, 5> perm{};
+  for (size_t k = 0; k < n; ++k) perm[k] = static_cast<uint8_t>(k);
+  // Start from the order of patch indices so that ties between equal costs
+  // resolve the same way whatever order Embree reported the hits in.
+  std::sort(perm.begin(), perm.begin() + n, [&](uint8_t a, uint8_t b) { return hits[lo + a].patch < hits[lo + b].patch; });
+  std::vector<GroupOrder> out;
+  do {
+    GroupOrder g;
+    g.perm = perm;
+    g.first_back_live = facing(mesh, hits[lo + perm[0]]).backward >= 0;
+    g.last_forward_live = facing(mesh, hits[lo + perm[n - 1]]).forward >= 0;
+    for (size_t k = 0; k + 1 < n; ++k)
+      g.inner += (facing(mesh, hits[lo + perm[k]]).forward >= 0) != (facing(mesh, hits[lo + perm[k + 1]]).backward >= 0);
+    out.push_back(g);
+  } while (n > 1 && std::next_permutation(perm.begin(), perm.begin() + n, [&](uint8_t a, uint8_t b) {
+    return hits[lo + a].patch < hits[lo + b].patch;
+  }));
+  return out;
+}
+
+}  // namespace
+
+void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hits) {
+  // Groups of crossings within epsilon of the group's first one.
+  thread_local std::vector<std::pair<size_t, size_t>> groups;  // (start, size)
+  groups.clear();
+  bool any_tie = false;
+  for (size_t i = 0; i < hits.size();) {
+    size_t j = i + 1;
+    while (j < hits.size() && hits[j].t - hits[i].t <= epsilon) ++j;
+    groups.push_back({i, j - i});
+    any_tie |= j - i > 1;
+    i = j;
+  }
+  if (!any_tie) return;
+
+  // Dynamic programme over the groups; the state is whether the face that the
+  // last crossing so far turns towards the line end is live. Beyond both ends
+  // of the line is empty space, which counts as a black side.
+  constexpr int kInf = 1 << 29;
+  struct Cell {
+    int cost = kInf;
+    int order = -1;       // index into the group's orders
+    int previous = 0;     // state before this group
+  };
+  std::vector<std::vector<GroupOrder>> orders(groups.size());
+  std::vector<std::array<Cell, 2>> dp(groups.size());
+  std::array<int, 2> before{0, kInf};
+  for (size_t g = 0; g < groups.size(); ++g) {
+    const auto [lo, n] = groups[g];
+    if (n <= kMaxTieGroup) {
+      orders[g] = group_orders(mesh, hits, lo, n);
+    } else {  // too many to permute: keep the reported order
+      GroupOrder keep;
+      for (size_t k = 0; k < kMaxTieGroup; ++k) keep.perm[k] = static_cast<uint8_t>(k);
+      keep.first_back_live = facing(mesh, hits[lo]).backward >= 0;
+      keep.last_forward_live = facing(mesh, hits[lo + n - 1]).forward >= 0;
+      orders[g] = {keep};
+    }
+    for (size_t o = 0; o < orders[g].size(); ++o) {
+      const GroupOrder& go = orders[g][o];
+      for (int s = 0; s < 2; ++s) {
+        if (before[s] >= kInf) continue;
+        const int cost = before[s] + (s != static_cast<int>(go.first_back_live)) + go.inner;
+        Cell& cell = dp[g][go.last_forward_live];
+        if (cost < cell.cost) cell = {cost, static_cast<int>(o), s};
+      }
+    }
+    before = {dp[g][0].cost, dp[g][1].cost};
+  }
+  int state = before[0] <= before[1] + 1 ? 0 : 1;
+  thread_local std::vector<LineHit> scratch;
+  for (size_t g = groups.size(); g-- > 0;) {
+    const Cell& cell = dp[g][state];
+    const auto [lo, n] = groups[g];
+    if (n > 1 && n <= kMaxTieGroup) {
+      scratch.assign(hits.begin() + lo, hits.begin() + lo + n);
+      for (size_t k = 0; k < n; ++k) hits[lo + k] = scratch[orders[g][cell.order].perm[k]];
+    }
+    state = cell.previous;
+  }
+}
+
+}  // namespace mpath
