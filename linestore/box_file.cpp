@@ -57,13 +57,10 @@ fs::path partial_path(const fs::path& path) {
 }
 
 std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events) {
-  std::string raw;
-  events = 0;
-  for (const LineRecord& l : lines) {
-    encode_line(l, raw);
-    events += l.events.size();
-  }
-  return raw;
+  ChunkEncoder encoder;
+  for (const LineRecord& l : lines) encoder.add(l);
+  events = encoder.events();
+  return encoder.finish();
 }
 
 EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_t lines, uint64_t events, int level) {

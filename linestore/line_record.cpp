@@ -4,20 +4,53 @@
 
 namespace mpath::linestore {
 
-// A line: varint(events), varint(entry_ar + 1), varint(exit_ar + 1) (0 = none),
-// then per event varint(id << 2 | kind << 1 | along), and for a child box
-// varint(entry_ar + 1), varint(exit_ar + 1).
-void encode_line(const LineRecord& line, std::string& out) {
-  put_varint(out, line.events.size());
-  put_varint(out, static_cast<uint64_t>(line.entry_ar) + 1);
-  put_varint(out, static_cast<uint64_t>(line.exit_ar) + 1);
-  for (const Event& e : line.events) {
-    put_varint(out, (static_cast<uint64_t>(e.id) << 2) | (static_cast<uint64_t>(e.kind) << 1) | (e.along ? 1 : 0));
+namespace {
+
+uint64_t ar_code(uint32_t ar) { return ar == kNoAr ? 0 : static_cast<uint64_t>(ar) + 1; }
+uint64_t event_code(const Event& e) {
+  return (static_cast<uint64_t>(e.id) << 2) | (static_cast<uint64_t>(e.kind) << 1) | (e.along ? 1 : 0);
+}
+uint64_t zigzag(int64_t v) { return (static_cast<uint64_t>(v) << 1) ^ static_cast<uint64_t>(v >> 63); }
+int64_t unzigzag(uint64_t v) { return static_cast<int64_t>(v >> 1) ^ -static_cast<int64_t>(v & 1); }
+
+}  // namespace
+
+// A chunk is two streams (docs/store-format.md): varint(size of the line
+// stream), the line stream, then the event stream. Line stream, per line:
+// varint(events << 1 | has_ars), and if has_ars varint(entry + 1),
+// varint(exit + 1). Event stream: per event varint(id << 2 | kind << 1 |
+// along), the first event of a line as a zigzag delta from the previous
+// line's first event; a child box adds varint(entry + 1), varint(exit + 1).
+void ChunkEncoder::add(const LineRecord& line) {
+  const bool has_ars = line.entry_ar != kNoAr || line.exit_ar != kNoAr;
+  put_varint(lines_, (static_cast<uint64_t>(line.events.size()) << 1) | (has_ars ? 1 : 0));
+  if (has_ars) {
+    put_varint(lines_, ar_code(line.entry_ar));
+    put_varint(lines_, ar_code(line.exit_ar));
+  }
+  for (size_t k = 0; k < line.events.size(); ++k) {
+    const Event& e = line.events[k];
+    const uint64_t code = event_code(e);
+    if (k == 0) {
+      put_varint(events_, zigzag(static_cast<int64_t>(code) - static_cast<int64_t>(previous_first_)));
+      previous_first_ = code;
+    } else {
+      put_varint(events_, code);
+    }
     if (e.kind == Event::child_box) {
-      put_varint(out, static_cast<uint64_t>(e.entry_ar) + 1);
-      put_varint(out, static_cast<uint64_t>(e.exit_ar) + 1);
+      put_varint(events_, ar_code(e.entry_ar));
+      put_varint(events_, ar_code(e.exit_ar));
     }
   }
+  event_count_ += line.events.size();
+}
+
+std::string ChunkEncoder::finish() {
+  std::string out;
+  put_varint(out, lines_.size());
+  out += lines_;
+  out += events_;
+  return out;
 }
 
 void DecodedChunk::clear() {
@@ -30,8 +63,8 @@ void DecodedChunk::clear() {
 namespace {
 bool get_ar(const unsigned char* data, size_t size, size_t& pos, uint32_t& ar) {
   uint64_t v;
-  if (!get_varint(data, size, pos, v) || v > 0x100000000ull) return false;
-  ar = static_cast<uint32_t>(v - 1);  // 0 wraps to kNoAr
+  if (!get_varint(data, size, pos, v) || v > 0xFFFFFFFFull) return false;
+  ar = v == 0 ? kNoAr : static_cast<uint32_t>(v - 1);
   return true;
 }
 }  // namespace
@@ -40,28 +73,41 @@ bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, Decode
   out.clear();
   out.first.reserve(lines + 1);
   size_t pos = 0;
+  uint64_t line_bytes;
+  if (!get_varint(data, size, pos, line_bytes) || line_bytes > size - pos) return false;
+  size_t lp = pos;                       // line stream
+  const size_t line_end = pos + line_bytes;
+  size_t ep = line_end;                  // event stream
+  uint64_t previous_first = 0;
   for (uint64_t i = 0; i < lines; ++i) {
-    uint64_t count;
-    uint32_t entry, exit;
-    if (!get_varint(data, size, pos, count) || count > size) return false;
-    if (!get_ar(data, size, pos, entry) || !get_ar(data, size, pos, exit)) return false;
+    uint64_t head;
+    if (!get_varint(data, line_end, lp, head)) return false;
+    const uint64_t count = head >> 1;
+    uint32_t entry = kNoAr, exit = kNoAr;
+    if ((head & 1) && (!get_ar(data, line_end, lp, entry) || !get_ar(data, line_end, lp, exit))) return false;
+    if (count > size) return false;
     out.first.push_back(static_cast<uint32_t>(out.events.size()));
     out.entry_ar.push_back(entry);
     out.exit_ar.push_back(exit);
     for (uint64_t k = 0; k < count; ++k) {
       uint64_t code;
-      if (!get_varint(data, size, pos, code) || (code >> 2) > 0xFFFFFFFFull) return false;
+      if (!get_varint(data, size, ep, code)) return false;
+      if (k == 0) {
+        code = static_cast<uint64_t>(static_cast<int64_t>(previous_first) + unzigzag(code));
+        previous_first = code;
+      }
+      if ((code >> 2) > 0xFFFFFFFFull) return false;
       Event e;
       e.id = static_cast<uint32_t>(code >> 2);
       e.kind = (code & 2) ? Event::child_box : Event::patch;
       e.along = code & 1;
-      if (e.kind == Event::child_box && (!get_ar(data, size, pos, e.entry_ar) || !get_ar(data, size, pos, e.exit_ar)))
+      if (e.kind == Event::child_box && (!get_ar(data, size, ep, e.entry_ar) || !get_ar(data, size, ep, e.exit_ar)))
         return false;
       out.events.push_back(e);
     }
   }
   out.first.push_back(static_cast<uint32_t>(out.events.size()));
-  return pos == size;
+  return lp == line_end && ep == size;
 }
 
 }  // namespace mpath::linestore

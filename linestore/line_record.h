@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -31,8 +32,18 @@ struct LineRecord {
   bool operator==(const LineRecord&) const = default;
 };
 
-// Appends the encoding of `line` to `out` (docs/store-format.md).
-void encode_line(const LineRecord& line, std::string& out);
+// Encodes the lines of one chunk (docs/store-format.md).
+class ChunkEncoder {
+ public:
+  void add(const LineRecord& line);
+  uint64_t events() const { return event_count_; }
+  std::string finish();
+
+ private:
+  std::string lines_, events_;
+  uint64_t previous_first_ = 0;
+  uint64_t event_count_ = 0;
+};
 
 // Lines of a decoded chunk, flat: line i's events are events[first[i] .. first[i+1]).
 struct DecodedChunk {

@@ -1,5 +1,7 @@
 #include "line_tracing.h"
 
+#include <algorithm>
+
 #include "line_order.h"
 
 namespace mpath {
@@ -42,6 +44,14 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
         if (face >= 0) ++crossings[face];
     }
   }
+  // Lines in order of their first and last crossings: neighbouring records
+  // start alike, which the delta coding and zstd turn into fewer bytes. Any
+  // order of lines is a valid Multipath pass; this one is fixed by the content.
+  auto key = [](const linestore::LineRecord& r) {
+    if (r.events.empty()) return std::make_pair(uint64_t{0}, uint64_t{0});
+    return std::make_pair(uint64_t{r.events.front().id} + 1, uint64_t{r.events.back().id});
+  };
+  std::stable_sort(out.begin(), out.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
 }
 
 }  // namespace mpath
