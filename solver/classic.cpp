@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "first_shot.h"
 #include "progress.h"
 #include "sampling.h"
 #include "transport.h"
@@ -15,30 +16,6 @@ namespace mpath {
 namespace {
 
 constexpr unsigned kGlobalLineStream = 2;
-
-// Adds a pass's shard accumulators to the state, in shard order.
-void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, RadiosityState& state) {
-  const int ch = state.channels;
-  for (size_t f = 0; f < state.faces; ++f) {
-    double unsent = 0;  // fraction of the quota no line took
-    for (size_t s = 0; s < acc.size(); ++s) unsent += acc[s].allowance - acc[s].quota_used[f];
-    for (int c = 0; c < ch; ++c) {
-      const size_t i = state.at(f, c);
-      double gathered = 0, gain = 0;
-      for (const ShardAccumulator& a : acc) {
-        gathered += a.gathered[i];
-        gain += a.phi_gain[i];
-      }
-      state.unshot[i] = in.quota[i] * unsent + gathered;
-      state.phi[i] += gain;
-    }
-  }
-  for (const ShardAccumulator& a : acc)
-    for (int c = 0; c < ch; ++c) {
-      state.energy.absorbed[c] += a.absorbed[c];
-      state.energy.escaped[c] += a.escaped[c];
-    }
-}
 
 }  // namespace
 
@@ -57,16 +34,7 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
   const LineSequence points(sequence, seed, pass);
   const auto start = std::chrono::steady_clock::now();
   const BoxLineSampler sampler(line_box(mesh.bounds));
-  PassInputs in;
-  in.state = &state;
-  in.mesh = &mesh;
-  in.quota = state.unshot;
-  std::fill(state.unshot.begin(), state.unshot.end(), 0.0);
-  in.share.resize(state.faces);
-  for (size_t f = 0; f < state.faces; ++f) {
-    const double expected = static_cast<double>(lines) * 2.0 * mesh.face_area(static_cast<int>(f)) / sampler.surface_area();
-    in.share[f] = 1.0 / expected;
-  }
+  const PassInputs in = PassInputs::start(state, mesh, forecast_crossings(mesh, static_cast<double>(lines)));
 
   std::vector<ShardAccumulator> acc(shards);
   const double tie_epsilon = 1e-7 * mesh.bounds.diagonal();
@@ -74,7 +42,7 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
   tbb::parallel_for(0, shards, [&](int s) {
     const uint64_t lo = lines * s / shards, hi = lines * (s + 1) / shards;
     ShardAccumulator& a = acc[s];
-    a.reset(state.faces, state.channels);
+    a.reset(state.faces);
     a.allowance = static_cast<double>(hi - lo) / static_cast<double>(lines);
     Rng rng = make_rng(seed, kGlobalLineStream, (static_cast<unsigned long long>(pass) << 20) + s);
     std::vector<LineHit> hits;
@@ -107,29 +75,38 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
   return stats;
 }
 
-IterationLog solve_classic(const Options& options, const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state,
-                           int shards) {
-  IterationLog log;
-  const double first_unshot = state.unshot_total();
+void iterate(const Options& options, const RadiosityState& state, IterationLog& log, const PassFunction& run_pass,
+             const std::function<void()>& after_pass) {
   const double emitted = state.emitted_total();
-  const auto floor_lines = std::min(static_cast<uint64_t>(options.lines.total), coverage_lines(mesh));
-  for (int pass = 1; pass <= options.solver.iterations; ++pass) {
-    const double unshot = state.unshot_total();
-    if (unshot / emitted < options.solver.tolerance) {
-      log.converged = true;
-      break;
-    }
-    const double share = first_unshot > 0 ? unshot / first_unshot : 1.0;
-    const auto lines = std::max(floor_lines, static_cast<uint64_t>(std::ceil(static_cast<double>(options.lines.total) * share)));
-    const PassStats p = classic_pass(mesh, tracer, state, lines, options.lines.seed, static_cast<unsigned>(pass), shards,
-                                     options.lines.sequence);
+  if (log.first_unshot < 0) log.first_unshot = state.unshot_total();
+  for (unsigned pass = static_cast<unsigned>(log.passes.size()) + 1; pass <= static_cast<unsigned>(options.solver.iterations);
+       ++pass) {
+    if (state.unshot_total() / emitted < options.solver.tolerance) break;
+    const PassStats p = run_pass(pass);
     spdlog::info("pass {}: {} lines, {} hits, {:.2f} s, unshot {:.3e} of emitted", p.pass, p.lines, p.hits, p.seconds,
                  p.unshot_fraction);
     log.passes.push_back(p);
     log.lines += p.lines;
     log.hits += p.hits;
+    if (after_pass) after_pass();
   }
-  if (!log.converged) log.converged = state.unshot_total() / emitted < options.solver.tolerance;
+  log.converged = state.unshot_total() / emitted < options.solver.tolerance;
+}
+
+uint64_t classic_pass_lines(const Options& options, const PatchMesh& mesh, const IterationLog& log,
+                            const RadiosityState& state) {
+  const auto floor_lines = std::min(static_cast<uint64_t>(options.lines.total), coverage_lines(mesh));
+  const double share = log.first_unshot > 0 ? state.unshot_total() / log.first_unshot : 1.0;
+  return std::max(floor_lines, static_cast<uint64_t>(std::ceil(static_cast<double>(options.lines.total) * share)));
+}
+
+IterationLog solve_classic(const Options& options, const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state,
+                           int shards) {
+  IterationLog log;
+  iterate(options, state, log, [&](unsigned pass) {
+    return classic_pass(mesh, tracer, state, classic_pass_lines(options, mesh, log, state), options.lines.seed, pass,
+                        shards, options.lines.sequence);
+  });
   return log;
 }
 

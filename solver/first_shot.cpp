@@ -44,24 +44,31 @@ std::vector<uint64_t> allocate_lines(const RadiosityState& s, long long budget, 
 
 }  // namespace
 
-double classic_crossings_per_area(const Options& options, const PatchMesh& mesh) {
-  if (options.first_shot.mode != "auto") return 0.0;
-  return static_cast<double>(options.lines.total) * 2.0 / line_box(mesh.bounds).surface_area();
+std::vector<double> emitter_crossings(const Options& options, std::vector<double> crossings) {
+  if (options.first_shot.mode != "auto") return {};
+  return crossings;
+}
+
+std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines) {
+  const double box_area = line_box(mesh.bounds).surface_area();
+  std::vector<double> c(mesh.face_count());
+  for (size_t f = 0; f < c.size(); ++f) c[f] = lines * 2.0 * mesh.face_area(static_cast<int>(f)) / box_area;
+  return c;
 }
 
 FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long budget,
-                          unsigned long long seed, int shards, double global_crossings_per_area) {
+                          unsigned long long seed, int shards, const std::vector<double>& global_crossings) {
   const auto start = std::chrono::steady_clock::now();
   FirstShotStats stats;
   std::vector<int> emitters;
   for (size_t f = 0; f < state.faces; ++f)
     if (face_power(state, static_cast<int>(f)) > 0) emitters.push_back(static_cast<int>(f));
   std::vector<uint64_t> counts = allocate_lines(state, budget, emitters);
-  if (global_crossings_per_area > 0) {
+  if (!global_crossings.empty()) {
     std::vector<int> local;
     for (size_t e = 0; e < emitters.size(); ++e) {
       const int f = emitters[e];
-      if (global_crossings_per_area * mesh.face_area(f) >= static_cast<double>(counts[e])) {
+      if (global_crossings[f] >= static_cast<double>(counts[e])) {
         for (int c = 0; c < state.channels; ++c) state.unshot[state.at(f, c)] += state.emitted_power[state.at(f, c)];
         ++stats.global_emitter_faces;
       } else {
@@ -83,7 +90,7 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   Progress progress("first shot", total, "lines", true);
   tbb::parallel_for(0, shards, [&](int s) {
     ShardAccumulator& a = acc[s];
-    a.reset(state.faces, ch);
+    a.reset(state.faces);
     Rng rng = make_rng(seed, kFirstShotStream, static_cast<unsigned long long>(s));
     const uint64_t lo = total * s / shards, hi = total * (s + 1) / shards;
     size_t e = std::upper_bound(first.begin(), first.end(), lo) - first.begin() - 1;
@@ -115,16 +122,7 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   progress.finish();
 
   // Merge in shard order: the result does not depend on scheduling.
-  for (const ShardAccumulator& a : acc) {
-    for (size_t i = 0; i < state.phi.size(); ++i) {
-      state.phi[i] += a.phi_gain[i];
-      state.unshot[i] += a.gathered[i];
-    }
-    for (int c = 0; c < ch; ++c) {
-      state.energy.absorbed[c] += a.absorbed[c];
-      state.energy.escaped[c] += a.escaped[c];
-    }
-  }
+  merge_received(acc, state);
   stats.lines = total;
   stats.emitter_faces = emitters.size();
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "config.h"
 #include "radiosity_state.h"
@@ -18,16 +19,18 @@ struct FirstShotStats {
   double seconds = 0;
 };
 
-// `global_crossings_per_area`: expected crossings of a unit-area face by the
-// first pass of global lines (0: every emitter is shot with local lines). With
-// it, an emitting face that global lines will cross more often than it would
-// get local lines keeps its emission as unshot power for the global passes,
-// which sample it better at no extra tracing cost (docs/algorithm.md).
-// The `global_crossings_per_area` that first_shot.mode asks for with classic
-// passes of lines.total lines over the scene box.
-double classic_crossings_per_area(const Options& options, const PatchMesh& mesh);
+// `global_crossings`: per face, how many global lines of the first pass cross
+// it (empty: every emitter is shot with local lines). An emitting face that
+// global lines cross more often than it would get local lines keeps its
+// emission as unshot power for the global passes, which sample it better at
+// no extra tracing cost (docs/algorithm.md).
+// The `global_crossings` that first_shot.mode asks for, from per-face
+// crossing counts of the first pass (forecast or counted).
+std::vector<double> emitter_crossings(const Options& options, std::vector<double> crossings);
+// Forecast crossings of each face by N lines uniform over the scene box: N 2A/S.
+std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines);
 
 FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long lines,
-                          unsigned long long seed, int shards, double global_crossings_per_area = 0);
+                          unsigned long long seed, int shards, const std::vector<double>& global_crossings = {});
 
 }  // namespace mpath

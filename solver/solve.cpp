@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atomic_file.h"
+#include "checkpoint.h"
 #include "classic.h"
 #include "error.h"
 #include "first_shot.h"
@@ -15,6 +16,7 @@
 #include "render.h"
 #include "sampling.h"
 #include "solution_ply.h"
+#include "stored_lines.h"
 
 namespace mpath {
 namespace {
@@ -52,12 +54,9 @@ void write_json(const std::filesystem::path& path, const json& j) {
 
 void run_solve(const Options& options, const SolveFlags& flags) {
   const auto start = clock::now();
-  if (options.solver.method != "classic")
-    throw InputError(fmt::format("config key 'solver.method': '{}' solves from the line store of mpath-preprocess, "
-                                 "which this version does not read yet; use solver.method=classic",
-                                 options.solver.method));
-  if (flags.resume)
-    throw InputError("--resume: solver.method=classic keeps no checkpoints (it traces fresh lines); run it without --resume");
+  if (options.solver.method == "hierarchical")
+    throw InputError("config key 'solver.method': 'hierarchical' needs the hierarchy of subscenes, which this version "
+                     "does not build yet; use solver.method=multipath (stored lines) or classic");
 
   const int threads = effective_threads(options);
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
@@ -71,17 +70,48 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   }
   std::filesystem::create_directories(options.output.dir);
 
+  // A stored-line solve checks its store before any work.
+  std::unique_ptr<StoredLines> store;
+  if (options.solver.method == "multipath") {
+    store = std::make_unique<StoredLines>(options, mesh);
+    spdlog::info("store {}: {} lines, {} events, {:.1f} MB", options.store.dir.string(), store->lines(), store->events(),
+                 store->bytes() / 1e6);
+  }
+
   auto t = clock::now();
   const Tracer tracer(mesh);
   const double bvh_seconds = seconds_since(t);
 
   RadiosityState state = make_state(prepared.scene, mesh);
   spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
-  const double crossings_per_area = classic_crossings_per_area(options, mesh);
-  const FirstShotStats shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, threads,
-                                         crossings_per_area);
+  const std::string key = checkpoint_key(options, mesh, threads);
+  const auto checkpoint = options.output.dir / "checkpoint.bin";
+  IterationLog iterations;
+  FirstShotStats shot;
+  bool resumed = false;
+  if (flags.resume && std::filesystem::exists(checkpoint)) {
+    read_checkpoint(checkpoint, key, state, iterations);
+    resumed = true;
+    spdlog::info("resuming from {} after {} finished pass(es)", checkpoint.string(), iterations.passes.size());
+  } else {
+    if (flags.resume) spdlog::warn("--resume: no checkpoint at {}; starting from the beginning", checkpoint.string());
+    std::vector<double> crossings;
+    if (store) crossings.assign(store->crossings().begin(), store->crossings().end());
+    else crossings = forecast_crossings(mesh, static_cast<double>(options.lines.total));
+    shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, threads,
+                      emitter_crossings(options, std::move(crossings)));
+    write_checkpoint(checkpoint, key, state, iterations);
+  }
   t = clock::now();
-  const IterationLog iterations = solve_classic(options, mesh, tracer, state, threads);
+  const auto save = [&] { write_checkpoint(checkpoint, key, state, iterations); };
+  if (store) {
+    iterate(options, state, iterations, [&](unsigned pass) { return stored_pass(mesh, *store, state, pass, threads); }, save);
+  } else {
+    iterate(options, state, iterations, [&](unsigned pass) {
+      return classic_pass(mesh, tracer, state, classic_pass_lines(options, mesh, iterations, state), options.lines.seed,
+                          pass, threads, options.lines.sequence);
+    }, save);
+  }
   const double iteration_seconds = seconds_since(t);
   const double relative_residual = state.energy_residual() / state.emitted_total();
   spdlog::info("energy: unshot {:.3e} of emitted, balance residual {:.2e} (relative)",
@@ -133,12 +163,17 @@ void run_solve(const Options& options, const SolveFlags& flags) {
                    {"first_shot", shot.seconds}, {"iterations", iteration_seconds}, {"outputs", output_seconds},
                    {"total", seconds_since(start)}}},
       {"first_shot", {{"lines", shot.lines}, {"emitter_faces", shot.emitter_faces},
-                      {"global_emitter_faces", shot.global_emitter_faces}}},
+                      {"global_emitter_faces", shot.global_emitter_faces}, {"from_checkpoint", resumed}}},
       {"lines", {{"global", iterations.lines}, {"hits", iterations.hits}, {"local", shot.lines}}},
       {"iterations", {{"count", iterations.passes.size()}, {"converged", iterations.converged},
                       {"tolerance", options.solver.tolerance}, {"cap", options.solver.iterations},
                       {"unshot_fraction", state.unshot_total() / state.emitted_total()}, {"passes", passes}}},
       {"memory", {{"peak_rss_bytes", peak_rss_bytes()}}},
+      {"store", store ? json{{"dir", options.store.dir.string()}, {"lines", store->lines()}, {"events", store->events()},
+                             {"bytes", store->bytes()}, {"bytes_per_event", double(store->bytes()) / std::max<uint64_t>(1, store->events())},
+                             {"events_per_second_per_thread", iteration_seconds > 0 && !iterations.passes.empty()
+                                  ? double(iterations.hits) / iteration_seconds / threads : 0.0}}
+                      : json(nullptr)},
       {"energy", energy_json(state)},
       {"outputs", outputs},
       {"warnings", prepared.warnings},

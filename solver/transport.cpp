@@ -4,10 +4,25 @@
 
 namespace mpath {
 
-void ShardAccumulator::reset(size_t faces, int channels) {
-  gathered.assign(faces * channels, 0.0);
-  phi_gain.assign(faces * channels, 0.0);
-  quota_used.assign(faces, 0.0);
+PassInputs PassInputs::start(RadiosityState& state, const PatchMesh& mesh, const std::vector<double>& crossings) {
+  PassInputs in;
+  in.mesh = &mesh;
+  in.channels = state.channels;
+  in.faces.resize(state.faces);
+  for (size_t f = 0; f < state.faces; ++f) {
+    FaceInput& face = in.faces[f];
+    for (int c = 0; c < state.channels; ++c) {
+      face.quota[c] = state.unshot[state.at(f, c)];
+      face.rho[c] = state.rho[state.at(f, c)];
+      state.unshot[state.at(f, c)] = 0;
+    }
+    face.share = crossings[f] > 0 ? 1.0 / crossings[f] : 0.0;
+  }
+  return in;
+}
+
+void ShardAccumulator::reset(size_t face_count) {
+  faces.assign(face_count, FaceAccumulator{});
   absorbed = {};
   escaped = {};
   lines = hits = 0;
@@ -19,19 +34,18 @@ void receive(const RadiosityState& s, int face, const double* power, ShardAccumu
     for (int c = 0; c < ch; ++c) acc.absorbed[c] += power[c];
     return;
   }
-  const size_t base = static_cast<size_t>(face) * ch;
+  FaceAccumulator& a = acc.faces[face];
   for (int c = 0; c < ch; ++c) {
-    const double kept = s.rho[base + c] * power[c];
-    acc.phi_gain[base + c] += kept;
-    acc.gathered[base + c] += kept;
+    const double kept = s.rho[s.at(face, c)] * power[c];
+    a.phi_gain[c] += kept;
+    a.gathered[c] += kept;
     acc.absorbed[c] += power[c] - kept;
   }
 }
 
 void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, ShardAccumulator& acc) {
-  const RadiosityState& s = *in.state;
   const PatchMesh& mesh = *in.mesh;
-  const int ch = s.channels;
+  const int ch = in.channels;
   const size_t n = hits.size();
   ++acc.lines;
   acc.hits += n;
@@ -43,15 +57,16 @@ void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, Shar
 
   auto send_from = [&](int face, int to_hit, bool forward) {
     if (face < 0) return;
+    const FaceInput& input = in.faces[face];
+    FaceAccumulator& a = acc.faces[face];
     Send out{to_hit, forward, {0, 0, 0}};
-    const size_t base = static_cast<size_t>(face) * ch;
-    double fraction = std::min(in.share[face], acc.allowance - acc.quota_used[face]);
+    double fraction = std::min(input.share, acc.allowance - a.quota_used);
     if (fraction < 0) fraction = 0;
-    acc.quota_used[face] += fraction;
+    a.quota_used += fraction;
     bool any = false;
     for (int c = 0; c < ch; ++c) {
-      out.power[c] = in.quota[base + c] * fraction + acc.gathered[base + c];
-      acc.gathered[base + c] = 0;
+      out.power[c] = input.quota[c] * fraction + a.gathered[c];
+      a.gathered[c] = 0;
       any |= out.power[c] != 0;
     }
     if (any) sends.push_back(out);
@@ -68,8 +83,51 @@ void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, Shar
       continue;
     }
     const Facing f = facing(mesh, hits[out.to_hit]);
-    receive(s, out.forward ? f.backward : f.forward, out.power, acc);
+    const int face = out.forward ? f.backward : f.forward;
+    if (face < 0) {
+      for (int c = 0; c < ch; ++c) acc.absorbed[c] += out.power[c];
+      continue;
+    }
+    const FaceInput& input = in.faces[face];
+    FaceAccumulator& a = acc.faces[face];
+    for (int c = 0; c < ch; ++c) {
+      const double kept = input.rho[c] * out.power[c];
+      a.phi_gain[c] += kept;
+      a.gathered[c] += kept;
+      acc.absorbed[c] += out.power[c] - kept;
+    }
   }
 }
+
+namespace {
+
+// Adds gathered power and Phi gains of every shard, and the energy terms.
+void merge_gains(const std::vector<ShardAccumulator>& acc, RadiosityState& state) {
+  const int ch = state.channels;
+  for (size_t f = 0; f < state.faces; ++f)
+    for (const ShardAccumulator& a : acc)
+      for (int c = 0; c < ch; ++c) {
+        state.unshot[state.at(f, c)] += a.faces[f].gathered[c];
+        state.phi[state.at(f, c)] += a.faces[f].phi_gain[c];
+      }
+  for (const ShardAccumulator& a : acc)
+    for (int c = 0; c < ch; ++c) {
+      state.energy.absorbed[c] += a.absorbed[c];
+      state.energy.escaped[c] += a.escaped[c];
+    }
+}
+
+}  // namespace
+
+void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, RadiosityState& state) {
+  for (size_t f = 0; f < state.faces; ++f) {
+    double unsent = 1.0;  // fraction of the quota no line took
+    for (const ShardAccumulator& a : acc) unsent -= a.faces[f].quota_used;
+    for (int c = 0; c < state.channels; ++c) state.unshot[state.at(f, c)] = in.faces[f].quota[c] * unsent;
+  }
+  merge_gains(acc, state);
+}
+
+void merge_received(const std::vector<ShardAccumulator>& acc, RadiosityState& state) { merge_gains(acc, state); }
 
 }  // namespace mpath

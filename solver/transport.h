@@ -12,20 +12,35 @@
 
 namespace mpath {
 
-// What a pass reads but never writes: the unshot power each face had at the
-// start of the pass and the share of it that one crossing carries.
+// What a pass reads of a face but never writes, in one cache line: the
+// unshot power it had at the start of the pass (its quota), the share of it
+// that one crossing carries, and its reflectance.
+struct alignas(64) FaceInput {
+  double quota[3] = {0, 0, 0};
+  double share = 0;  // 1 / (crossings in the pass)
+  double rho[3] = {0, 0, 0};
+};
+
 struct PassInputs {
-  const RadiosityState* state = nullptr;
   const PatchMesh* mesh = nullptr;
-  std::vector<double> quota;  // face * channels: U_f at pass start
-  std::vector<double> share;  // face: 1 / (expected crossings in the pass)
+  int channels = 3;
+  std::vector<FaceInput> faces;
+
+  // Moves the state's unshot power into the quotas (unshot becomes 0);
+  // `crossings` per face (0: the face is never crossed and keeps its quota).
+  static PassInputs start(RadiosityState& state, const PatchMesh& mesh, const std::vector<double>& crossings);
+};
+
+// What a shard accumulates for a face during a pass, in one cache line.
+struct alignas(64) FaceAccumulator {
+  double gathered[3] = {0, 0, 0};  // received this pass, not yet re-sent
+  double phi_gain[3] = {0, 0, 0};
+  double quota_used = 0;           // fraction of the quota sent
 };
 
 // A shard's private accumulators, merged into the state after the pass.
 struct ShardAccumulator {
-  std::vector<double> gathered;   // face * channels: received this pass, not yet re-sent
-  std::vector<double> phi_gain;   // face * channels
-  std::vector<double> quota_used; // face: fraction of the quota sent
+  std::vector<FaceAccumulator> faces;
   double allowance = 1;           // fraction of each quota this shard may send
   std::array<double, 3> absorbed{}, escaped{};
   uint64_t lines = 0, hits = 0;
@@ -38,12 +53,18 @@ struct ShardAccumulator {
   };
   std::vector<Send> sends;
 
-  void reset(size_t faces, int channels);
+  void reset(size_t face_count);
 };
 
-// Power arriving at `face` (-1: a black back side): rho of it is kept as
-// accumulated and unshot power, the rest absorbed.
+// Power arriving at `face` (-1: a black back side) outside a pass (the first
+// shot): rho of it is kept as accumulated and unshot power, the rest absorbed.
 void receive(const RadiosityState& state, int face, const double* power, ShardAccumulator& acc);
+
+// Adds a pass's shard accumulators to the state, in shard order; the share of
+// each face's quota that no line took stays unshot.
+void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, RadiosityState& state);
+// The same for the first shot, which has no quotas.
+void merge_received(const std::vector<ShardAccumulator>& acc, RadiosityState& state);
 
 // One line in both directions: every face on it sends its per-line share of
 // its quota plus what it gathered earlier in the pass; all sends are taken

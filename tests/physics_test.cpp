@@ -143,7 +143,7 @@ TEST_P(FormFactor, FromLocalLinesMatchesHowell) {
   const Tracer tracer(mesh);
   RadiosityState state = make_state(scene, mesh);
   const long long lines = 1'000'000;
-  first_shot(mesh, tracer, state, lines, 7, 2, 0.0);
+  first_shot(mesh, tracer, state, lines, 7, 2);
   const double arrived = (state.phi[1] - state.emitted_power[1]) / 0.5;
   const double f = arrived / state.emitted_total();
   // Binomial: each local line reaches B with probability F.

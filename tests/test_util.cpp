@@ -114,7 +114,7 @@ Solved solve_classic_in_memory(const Scene& scene, const Options& options) {
   s.mesh = build_mesh(scene, options.mesh.max_patch_area);
   const Tracer tracer(s.mesh);
   s.state = make_state(scene, s.mesh);
-  const double crossings_per_area = classic_crossings_per_area(options, s.mesh);
+  const std::vector<double> crossings_per_area = emitter_crossings(options, forecast_crossings(s.mesh, static_cast<double>(options.lines.total)));
   first_shot(s.mesh, tracer, s.state, options.first_shot.lines, options.lines.seed, options.solver.threads,
              crossings_per_area);
   s.log = solve_classic(options, s.mesh, tracer, s.state, options.solver.threads);

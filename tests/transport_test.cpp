@@ -79,11 +79,8 @@ struct ColumnPass {
   PassInputs in;
   ShardAccumulator acc;
   explicit ColumnPass(double share) : state(make_state(c.scene, c.mesh)) {
-    in.state = &state;
-    in.mesh = &c.mesh;
-    in.quota.assign(state.faces, 0.0);
-    in.share.assign(state.faces, share);
-    acc.reset(state.faces, state.channels);
+    in = PassInputs::start(state, c.mesh, std::vector<double>(state.faces, 1.0 / share));
+    acc.reset(state.faces);
   }
 };
 
@@ -92,27 +89,27 @@ TEST(Transport, ConservesPowerAlongALineAndAbsorbsAtBlackBacks) {
   const Column& c = pass.c;
   PassInputs& in = pass.in;
   ShardAccumulator& acc = pass.acc;
-  in.quota[2] = 8.0;  // the block top has 8 W to send, 2 W per crossing
-  in.quota[3] = 4.0;  // the ceiling 4 W, 1 W per crossing
+  in.faces[2].quota[0] = 8.0;  // the block top has 8 W to send, 2 W per crossing
+  in.faces[3].quota[0] = 4.0;  // the ceiling 4 W, 1 W per crossing
   const Vec3 up{0, 1, 0};
   const std::vector<LineHit> hits = crossings(c.mesh, up, {{0.0, 0}, {0.0, 1}, {1.0, 2}, {2.0, 3}});
   transport_line(in, hits, acc);
   // The top sends 2 W up to the ceiling, which keeps rho = 0.5 of it; the
   // ceiling sends 1 W down to the top, which keeps 0.5 W. Both backs are black.
-  EXPECT_DOUBLE_EQ(acc.phi_gain[3], 1.0);
-  EXPECT_DOUBLE_EQ(acc.phi_gain[2], 0.5);
-  EXPECT_DOUBLE_EQ(acc.gathered[3], 1.0);
+  EXPECT_DOUBLE_EQ(acc.faces[3].phi_gain[0], 1.0);
+  EXPECT_DOUBLE_EQ(acc.faces[2].phi_gain[0], 0.5);
+  EXPECT_DOUBLE_EQ(acc.faces[3].gathered[0], 1.0);
   EXPECT_DOUBLE_EQ(acc.absorbed[0], 1.5);
   EXPECT_DOUBLE_EQ(acc.escaped[0], 0.0);
   // Sends come before receives: the top's gathered 0.5 W was not sent back.
-  EXPECT_DOUBLE_EQ(acc.quota_used[2], 0.25);
+  EXPECT_DOUBLE_EQ(acc.faces[2].quota_used, 0.25);
   // A second line sends the top's gathered power along with its share.
   transport_line(in, hits, acc);
-  EXPECT_DOUBLE_EQ(acc.phi_gain[3], 1.0 + 0.5 * 2.5);
+  EXPECT_DOUBLE_EQ(acc.faces[3].phi_gain[0], 1.0 + 0.5 * 2.5);
   double sent = 0;
-  for (int f : {2, 3}) sent += in.quota[f] * acc.quota_used[f];
+  for (int f : {2, 3}) sent += in.faces[f].quota[0] * acc.faces[f].quota_used;
   double held = 0;
-  for (double g : acc.gathered) held += g;
+  for (const FaceAccumulator& a : acc.faces) held += a.gathered[0];
   EXPECT_DOUBLE_EQ(sent, acc.absorbed[0] + acc.escaped[0] + held);
 }
 
@@ -120,7 +117,7 @@ TEST(Transport, PowerLeavingTheEndsOfALineEscapes) {
   ColumnPass pass(1.0);
   PassInputs& in = pass.in;
   ShardAccumulator& acc = pass.acc;
-  in.quota[2] = 3.0;
+  in.faces[2].quota[0] = 3.0;
   const std::vector<LineHit> top = crossings(pass.c.mesh, {0, 1, 0}, {{1.0, 2}});  // only the block top on this line
   transport_line(in, top, acc);
   EXPECT_DOUBLE_EQ(acc.escaped[0], 3.0);

@@ -1,0 +1,27 @@
+// Checkpoints of a solve: the state after each finished iteration, written
+// atomically to output.dir/checkpoint.bin, so that `mpath-solve --resume`
+// continues an interrupted run and gets the uninterrupted result.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "classic.h"
+#include "config.h"
+#include "radiosity_state.h"
+
+namespace mpath {
+
+// Everything a solve's state depends on, hashed: scene, mesh, method, lines,
+// first shot, emitters, threads; not the iteration cap, tolerance or outputs.
+std::string checkpoint_key(const Options& options, const PatchMesh& mesh, int threads);
+
+void write_checkpoint(const std::filesystem::path& path, const std::string& key, const RadiosityState& state,
+                      const IterationLog& log);
+
+// Loads a checkpoint into `state` and `log`; throws InputError naming the file
+// when it is damaged or was made with other settings.
+void read_checkpoint(const std::filesystem::path& path, const std::string& key, RadiosityState& state,
+                     IterationLog& log);
+
+}  // namespace mpath

@@ -1,0 +1,166 @@
+// The store end to end: mpath-preprocess then mpath-solve (multipath), against
+// an in-memory solve over the same lines, across shards and interruptions,
+// and with damaged or mismatched stores.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "line_tracing.h"
+#include "scene_readers.h"
+#include "stored_lines.h"
+#include "test_util.h"
+#include "transport.h"
+
+namespace mpath {
+namespace {
+
+using test::RunResult;
+using test::TempDir;
+
+const std::string kCornell = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box.toml";
+const std::string kSmall = " lines.total=150000 store.chunk_lines=4096 first_shot.lines=50000";
+
+std::string bin(const char* name) {
+  return (std::filesystem::path(test::solve_bin()).parent_path() / name).string();
+}
+// Quiet unless the arguments ask for a log level.
+std::string quiet(const std::string& args) { return args.find("--log-level") == std::string::npos ? " -q " + args : " " + args; }
+RunResult preprocess(const std::string& args) { return test::run(bin("mpath-preprocess") + " " + kCornell + kSmall + quiet(args)); }
+RunResult solve(const std::string& args) {
+  return test::run(test::solve_bin() + " " + kCornell + kSmall + " solver.method=multipath output.png=false" + quiet(args));
+}
+
+TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
+  TempDir dir;
+  Options o = test::test_options(150'000, 50'000, 0.002);
+  o.scene.file = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box/cornell_box.obj";
+  o.store.chunk_lines = 4096;
+  o.store.dir = dir.path();
+  o.solver.method = "multipath";
+  o.solver.iterations = 3;
+  ASSERT_EQ(preprocess("store.dir=" + dir.path().string() + " mesh.max_patch_area=0.002 solver.threads=2 lines.sequence=random").exit_code, 0);
+
+  std::vector<std::string> warnings;
+  const Scene scene = load_scene(o, warnings);
+  const PatchMesh mesh = build_mesh(scene, o.mesh.max_patch_area);
+  const Tracer tracer(mesh);
+  const StoredLines store(o, mesh);
+
+  // In memory: the same chunks traced again, the same shards, the same passes.
+  const ChunkTracer chunks(o, mesh, tracer);
+  std::vector<std::vector<linestore::LineRecord>> records(chunks.chunk_count());
+  std::vector<uint32_t> counted(mesh.face_count(), 0);
+  for (uint64_t c = 0; c < chunks.chunk_count(); ++c) chunks.trace(c, records[c], counted);
+  EXPECT_EQ(counted, store.crossings());
+
+  RadiosityState from_store = make_state(scene, mesh), in_memory = make_state(scene, mesh);
+  first_shot(mesh, tracer, from_store, o.first_shot.lines, o.lines.seed, 2);
+  first_shot(mesh, tracer, in_memory, o.first_shot.lines, o.lines.seed, 2);
+  const std::vector<double> crossings(counted.begin(), counted.end());
+  for (unsigned pass = 1; pass <= 3; ++pass) {
+    stored_pass(mesh, store, from_store, pass, 2);
+    const PassInputs in = PassInputs::start(in_memory, mesh, crossings);
+    std::vector<ShardAccumulator> acc(2);
+    for (int s = 0; s < 2; ++s) {
+      acc[s].reset(mesh.face_count());
+      std::vector<LineHit> hits;
+      for (uint64_t c = records.size() * s / 2; c < records.size() * (s + 1) / 2; ++c)
+        for (const auto& line : records[c]) {
+          hits.clear();
+          for (const auto& e : line.events) hits.push_back({0.0, static_cast<int>(e.id), e.along});
+          transport_line(in, hits, acc[s]);
+        }
+    }
+    merge_pass(in, acc, in_memory);
+  }
+  for (size_t i = 0; i < from_store.phi.size(); ++i) ASSERT_NEAR(from_store.phi[i], in_memory.phi[i], 1e-12 * std::fabs(in_memory.phi[i]));
+  EXPECT_LT(std::fabs(from_store.energy_residual()) / from_store.emitted_total(), 1e-10);
+}
+
+TEST(Store, ShardedStoreEqualsOneMadeAtOnceAndRerunsSkipFinishedFiles) {
+  TempDir dir;
+  const std::string once = (dir / "once").string(), parts = (dir / "parts").string();
+  ASSERT_EQ(preprocess("store.dir=" + once).exit_code, 0);
+  RunResult r = preprocess("store.dir=" + parts + " --shard 2/3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "parts/manifest.json"));  // incomplete until every shard ran
+  ASSERT_EQ(preprocess("store.dir=" + parts + " --shard 3/3").exit_code, 0);
+  ASSERT_EQ(preprocess("store.dir=" + parts + " --shard 1/3").exit_code, 0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "parts/manifest.json"));
+  r = preprocess("store.dir=" + parts + " --shard 2/3 --log-level info");
+  EXPECT_NE(r.output.find("not traced again"), std::string::npos) << r.output;
+
+  ASSERT_EQ(solve("store.dir=" + once + " output.dir=" + (dir / "a").string()).exit_code, 0);
+  ASSERT_EQ(solve("store.dir=" + parts + " output.dir=" + (dir / "b").string()).exit_code, 0);
+  EXPECT_EQ(test::read_file(dir / "a/solution.ply"), test::read_file(dir / "b/solution.ply"));
+  const auto report = nlohmann::json::parse(test::read_file(dir / "b/report.json"));
+  EXPECT_EQ(report["store"]["lines"], 150000);
+  const auto& e = report["energy"];
+  EXPECT_NEAR(e["emitted"].get<double>(), e["absorbed"].get<double>() + e["escaped"].get<double>() + e["unshot"].get<double>(),
+              1e-9 * e["emitted"].get<double>());
+}
+
+TEST(Store, ResumeGivesTheUninterruptedResult) {
+  TempDir dir;
+  const std::string store = " store.dir=" + (dir / "store").string();
+  ASSERT_EQ(preprocess(store).exit_code, 0);
+  const std::string tol = " solver.tolerance=1e-9";
+  ASSERT_EQ(solve(store + tol + " solver.iterations=4 output.dir=" + (dir / "straight").string()).exit_code, 0);
+  ASSERT_EQ(solve(store + tol + " solver.iterations=2 output.dir=" + (dir / "resumed").string()).exit_code, 0);
+  const RunResult r = solve(store + tol + " solver.iterations=4 --resume --log-level info output.dir=" + (dir / "resumed").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("after 2 finished pass(es)"), std::string::npos) << r.output;
+  EXPECT_EQ(test::read_file(dir / "straight/solution.ply"), test::read_file(dir / "resumed/solution.ply"));
+  // A checkpoint made with other settings is refused.
+  const RunResult other = solve(store + tol + " solver.iterations=5 first_shot.lines=60000 --resume output.dir=" + (dir / "resumed").string());
+  EXPECT_NE(other.exit_code, 0);
+  EXPECT_NE(other.output.find("made with another scene, store or config"), std::string::npos) << other.output;
+}
+
+TEST(Store, DamagedOrMismatchedStoresAreRefusedByName) {
+  TempDir dir;
+  const std::string store = (dir / "store").string();
+  ASSERT_EQ(preprocess("store.dir=" + store).exit_code, 0);
+  const std::string out = " output.dir=" + (dir / "out").string();
+
+  RunResult r = solve("store.dir=" + store + " lines.total=160000" + out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("lines.total: the store was made with 150000, this run has 160000"), std::string::npos) << r.output;
+  r = solve("store.dir=" + store + " mesh.max_patch_area=0.001" + out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("the store does not match"), std::string::npos) << r.output;
+
+  const auto file = dir / "store/box0000.lines";
+  const std::string original = test::read_file(file);
+  std::string flipped = original;
+  flipped[flipped.size() / 3] = static_cast<char>(flipped[flipped.size() / 3] ^ 0x40);
+  test::write_file(file, flipped);
+  r = solve("store.dir=" + store + out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("box0000.lines: chunk"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("corrupted"), std::string::npos) << r.output;
+
+  test::write_file(file, original.substr(0, original.size() - 1000));
+  r = solve("store.dir=" + store + out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("box0000.lines"), std::string::npos) << r.output;
+
+  std::filesystem::remove(file);
+  r = solve("store.dir=" + store + out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("box0000.lines: missing"), std::string::npos) << r.output;
+
+  r = solve("store.dir=" + (dir / "nothing").string() + out);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("manifest.json: missing; run mpath-preprocess"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/solution.ply"));
+}
+
+TEST(Store, ShardOptionIsChecked) {
+  const RunResult r = preprocess("--shard 4/3");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--shard: expected i/n with 1 <= i <= n, got '4/3'"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace mpath
