@@ -189,7 +189,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   stats.compress_seconds = compress_ns * 1e-9;
   stats.write_seconds = write_seconds;
   stats.wall_seconds = seconds(clock::now() - start);
-  const nlohmann::json record = {{"shard", fmt::format("{}/{}", shard.index, shard.count)}, {"lines", stats.lines},
+  const nlohmann::json timings = {{"shard", fmt::format("{}/{}", shard.index, shard.count)}, {"lines", stats.lines},
                                  {"events", stats.events}, {"bytes", stats.bytes}, {"raw_bytes", stats.raw_bytes},
                                  {"trace_seconds", stats.trace_seconds}, {"encode_seconds", stats.encode_seconds},
                                  {"compress_seconds", stats.compress_seconds}, {"write_seconds", stats.write_seconds},
@@ -197,7 +197,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   {
     const fs::path json_path = dir / (shard.count == 1 ? std::string("preprocess.json")
                                                       : fmt::format("preprocess.part{:04}of{:04}.json", shard.index, shard.count));
-    std::ofstream(json_path) << record.dump(2) << "\n";
+    std::ofstream(json_path) << timings.dump(2) << "\n";
   }
   spdlog::info("{}: {} lines, {} events, {:.3f} bytes/event on disk ({:.2f} before compression), {:.1f} MB",
                path.string(), stats.lines, stats.events, stats.events ? double(stats.bytes) / stats.events : 0.0,
