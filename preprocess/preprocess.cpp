@@ -10,6 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "atomic_file.h"
 #include "box_file.h"
 #include "error.h"
 #include "hash.h"
@@ -197,7 +198,9 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   {
     const fs::path json_path = dir / (shard.count == 1 ? std::string("preprocess.json")
                                                       : fmt::format("preprocess.part{:04}of{:04}.json", shard.index, shard.count));
-    std::ofstream(json_path) << timings.dump(2) << "\n";
+    AtomicFile file(json_path);
+    file.stream() << timings.dump(2) << "\n";
+    file.commit();
   }
   spdlog::info("{}: {} lines, {} events, {:.3f} bytes/event on disk ({:.2f} before compression), {:.1f} MB",
                path.string(), stats.lines, stats.events, stats.events ? double(stats.bytes) / stats.events : 0.0,

@@ -44,13 +44,17 @@ def main(work, sizes):
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
+    plot(rows)
+
+
+def plot(rows):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 3, figsize=(11, 3.4))
     xs = [r["lines"] for r in rows]
     axes[0].semilogx(xs, [r["solver_peak_rss_bytes"] / 2**20 for r in rows], "o-")
-    axes[0].set_ylim(bottom=0)
+    axes[0].set_ylim(0, 1.3 * max(r["solver_peak_rss_bytes"] / 2**20 for r in rows))
     axes[0].set_title("solver peak RSS (MiB)")
     axes[1].semilogx(xs, [r["bytes_per_event"] for r in rows], "o-", label="on disk")
     axes[1].semilogx(xs, [r["raw_bytes_per_event"] for r in rows], "s--", label="before zstd")
@@ -73,4 +77,8 @@ def main(work, sizes):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], [int(x) for x in sys.argv[2:]])
+    if sys.argv[1] == "--plot":  # redraw from docs/benchmarks/store.csv
+        with open(os.path.join(ROOT, "docs/benchmarks/store.csv")) as f:
+            plot([{k: (v if k in ("scene", "commit") else float(v)) for k, v in r.items()} for r in csv.DictReader(f)])
+    else:
+        main(sys.argv[1], [int(x) for x in sys.argv[2:]])
