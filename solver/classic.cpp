@@ -62,17 +62,7 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
     progress.advance(since_report);
   });
   progress.finish();
-  merge_pass(in, acc, state);
-
-  PassStats stats;
-  stats.pass = static_cast<int>(pass);
-  for (const ShardAccumulator& a : acc) {
-    stats.lines += a.lines;
-    stats.hits += a.hits;
-  }
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  stats.unshot_fraction = state.unshot_total() / state.emitted_total();
-  return stats;
+  return finish_pass(in, acc, state, pass, start);
 }
 
 void iterate(const Options& options, const RadiosityState& state, IterationLog& log, const PassFunction& run_pass,

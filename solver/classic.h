@@ -12,16 +12,9 @@
 #include "config.h"
 #include "radiosity_state.h"
 #include "tracer.h"
+#include "transport.h"
 
 namespace mpath {
-
-struct PassStats {
-  int pass = 0;
-  uint64_t lines = 0;
-  uint64_t hits = 0;
-  double seconds = 0;
-  double unshot_fraction = 0;  // unshot / emitted after the pass
-};
 
 struct IterationLog {
   std::vector<PassStats> passes;

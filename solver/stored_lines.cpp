@@ -93,17 +93,7 @@ PassStats stored_pass(const PatchMesh& mesh, const StoredLines& store, Radiosity
     }
   });
   progress.finish();
-  merge_pass(in, acc, state);
-
-  PassStats stats;
-  stats.pass = static_cast<int>(pass);
-  for (const ShardAccumulator& a : acc) {
-    stats.lines += a.lines;
-    stats.hits += a.hits;
-  }
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  stats.unshot_fraction = state.unshot_total() / state.emitted_total();
-  return stats;
+  return finish_pass(in, acc, state, pass, start);
 }
 
 }  // namespace mpath

@@ -128,6 +128,20 @@ void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, 
   merge_gains(acc, state);
 }
 
+PassStats finish_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, RadiosityState& state,
+                      unsigned pass, std::chrono::steady_clock::time_point start) {
+  merge_pass(in, acc, state);
+  PassStats stats;
+  stats.pass = static_cast<int>(pass);
+  for (const ShardAccumulator& a : acc) {
+    stats.lines += a.lines;
+    stats.hits += a.hits;
+  }
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.unshot_fraction = state.unshot_total() / state.emitted_total();
+  return stats;
+}
+
 void merge_received(const std::vector<ShardAccumulator>& acc, RadiosityState& state) { merge_gains(acc, state); }
 
 }  // namespace mpath

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <vector>
 
@@ -66,6 +67,18 @@ void receive(const RadiosityState& state, int face, const double* power, ShardAc
 // Adds a pass's shard accumulators to the state, in shard order; the share of
 // each face's quota that no line took stays unshot.
 void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, RadiosityState& state);
+
+struct PassStats {
+  int pass = 0;
+  uint64_t lines = 0;
+  uint64_t hits = 0;
+  double seconds = 0;
+  double unshot_fraction = 0;  // unshot / emitted after the pass
+};
+
+// merge_pass, then the pass's statistics (`start`: when the pass began).
+PassStats finish_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, RadiosityState& state,
+                      unsigned pass, std::chrono::steady_clock::time_point start);
 // The same for the first shot, which has no quotas.
 void merge_received(const std::vector<ShardAccumulator>& acc, RadiosityState& state);
 

@@ -1,0 +1,63 @@
+// What mpath's programs share on the command line: the common flags, logging
+// to stderr, and turning errors into one line and an exit status.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "config.h"
+#include "error.h"
+#include "progress.h"
+
+namespace mpath {
+
+struct ProgramFlags {
+  std::string config;
+  std::vector<std::string> overrides;
+  bool print_config = false, quiet = false, dry_run = false;
+  std::string log_level = "info";
+};
+
+inline void add_common_flags(CLI::App& app, ProgramFlags& f) {
+  app.add_option("config", f.config, "TOML config file")->required();
+  app.add_option("overrides", f.overrides, "key=value overrides of config values (dotted TOML keys)");
+  app.add_flag("--print-config", f.print_config, "print the effective config and exit");
+  app.add_flag("--dry-run", f.dry_run, "check config and scene, then stop");
+  app.add_flag("-q,--quiet", f.quiet, "no progress and no log below warnings");
+  app.add_option("--log-level", f.log_level, "trace, debug, info, warn, error")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
+}
+
+// Sets up logging, loads the config, prints it (--print-config: only that)
+// and runs `body`; bad input exits 1 and anything else 2, with one line on stderr.
+template <typename Body>
+int run_program(const char* name, const ProgramFlags& f, Body body) {
+  spdlog::set_default_logger(spdlog::stderr_logger_mt("mpath"));
+  spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
+  spdlog::set_level(f.quiet ? spdlog::level::warn : spdlog::level::from_str(f.log_level));
+  Progress::set_enabled_default(!f.quiet);
+  try {
+    const Options options = load_options(f.config, f.overrides);
+    if (f.print_config) {
+      std::cout << options_to_toml(options);
+      return 0;
+    }
+    if (!f.quiet) std::cerr << "# effective config\n" << options_to_toml(options);
+    body(options);
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s: error: %s\n", name, e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: %s\n", name, e.what());
+    return 2;
+  }
+  return 0;
+}
+
+}  // namespace mpath
