@@ -103,6 +103,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
     write_checkpoint(checkpoint, key, state, iterations);
   }
   t = clock::now();
+  const uint64_t hits_before = iterations.hits;  // passes restored from a checkpoint are not timed here
   const auto save = [&] { write_checkpoint(checkpoint, key, state, iterations); };
   if (store) {
     iterate(options, state, iterations, [&](unsigned pass) { return stored_pass(mesh, *store, state, pass, threads); }, save);
@@ -172,7 +173,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
       {"store", store ? json{{"dir", options.store.dir.string()}, {"lines", store->lines()}, {"events", store->events()},
                              {"bytes", store->bytes()}, {"bytes_per_event", double(store->bytes()) / std::max<uint64_t>(1, store->events())},
                              {"events_per_second_per_thread", iteration_seconds > 0 && !iterations.passes.empty()
-                                  ? double(iterations.hits) / iteration_seconds / threads : 0.0}}
+                                  ? double(iterations.hits - hits_before) / iteration_seconds / threads : 0.0}}
                       : json(nullptr)},
       {"energy", energy_json(state)},
       {"outputs", outputs},
