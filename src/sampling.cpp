@@ -46,15 +46,51 @@ Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, Rng& rng) {
   return triangle_point(v2, v3, v1, rng);
 }
 
-double radical_inverse(uint64_t index, unsigned base) {
-  const double inv = 1.0 / base;
+namespace {
+
+// Digits of `index` in base B mirrored about the radix point; B a constant,
+// so the divisions become multiplications.
+template <unsigned B>
+double radical_inverse_in(uint64_t index) {
+  constexpr double inv = 1.0 / B;
   double f = inv, result = 0;
   while (index > 0) {
-    result += f * static_cast<double>(index % base);
-    index /= base;
+    const uint64_t next = index / B;
+    result += f * static_cast<double>(index - next * B);
+    index = next;
     f *= inv;
   }
   return result;
+}
+
+// Base 2: the bits reversed, exact (the same value as the digit loop).
+double radical_inverse_2(uint64_t v) {
+  v = ((v >> 1) & 0x5555555555555555ull) | ((v & 0x5555555555555555ull) << 1);
+  v = ((v >> 2) & 0x3333333333333333ull) | ((v & 0x3333333333333333ull) << 2);
+  v = ((v >> 4) & 0x0F0F0F0F0F0F0F0Full) | ((v & 0x0F0F0F0F0F0F0F0Full) << 4);
+  v = __builtin_bswap64(v);
+  return std::min(static_cast<double>(v) * 0x1p-64, 0x1.fffffffffffffp-1);
+}
+
+}  // namespace
+
+double radical_inverse(uint64_t index, unsigned base) {
+  switch (base) {
+    case 2: return radical_inverse_2(index);
+    case 3: return radical_inverse_in<3>(index);
+    case 5: return radical_inverse_in<5>(index);
+    case 7: return radical_inverse_in<7>(index);
+    default: {
+      const double inv = 1.0 / base;
+      double f = inv, result = 0;
+      while (index > 0) {
+        result += f * static_cast<double>(index % base);
+        index /= base;
+        f *= inv;
+      }
+      return result;
+    }
+  }
 }
 
 LineSequence::LineSequence(const std::string& kind, unsigned long long seed, unsigned pass) : halton_(kind == "halton") {

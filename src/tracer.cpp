@@ -18,8 +18,25 @@ void collect_filter(const RTCFilterFunctionNArguments* args) {
   auto* ctx = reinterpret_cast<CollectContext*>(args->context);
   const float t = RTCRayN_tfar(args->ray, args->N, 0);
   const unsigned prim = RTCHitN_primID(args->hit, args->N, 0);
-  ctx->hits->push_back({static_cast<double>(t), static_cast<int>(prim), false});
+  // Embree's geometric normal has the orientation of the patch's corners.
+  const float facing = RTCHitN_Ng_x(args->hit, args->N, 0) * RTCRayN_dir_x(args->ray, args->N, 0) +
+                       RTCHitN_Ng_y(args->hit, args->N, 0) * RTCRayN_dir_y(args->ray, args->N, 0) +
+                       RTCHitN_Ng_z(args->hit, args->N, 0) * RTCRayN_dir_z(args->ray, args->N, 0);
+  ctx->hits->push_back({static_cast<double>(t), static_cast<int>(prim), facing > 0});
   args->valid[0] = 0;  // reject, so traversal goes on to the next hit
+}
+
+void sort_by_distance(LineHit* hits, size_t n) {
+  // Few hits per line: insertion sort beats std::sort here.
+  for (size_t i = 1; i < n; ++i) {
+    const LineHit h = hits[i];
+    size_t j = i;
+    while (j > 0 && (hits[j - 1].t > h.t || (hits[j - 1].t == h.t && hits[j - 1].patch > h.patch))) {
+      hits[j] = hits[j - 1];
+      --j;
+    }
+    hits[j] = h;
+  }
 }
 
 // The intersect context of a nearest_from query.
@@ -90,6 +107,7 @@ Tracer::Tracer(const PatchMesh& mesh) : mesh_(mesh) {
   rtcCommitScene(scene_);
   MPATH_CHECK(rtcGetDeviceError(device_) == RTC_ERROR_NONE, "embree scene build failed");
   tie_epsilon_ = 1e-7 * std::max(mesh.bounds.diagonal(), 1e-30);
+  near_tie_ = 1e-4 * std::max(mesh.bounds.diagonal(), 1e-30);
   hair_ = 1e-6 * std::max(mesh.bounds.diagonal(), 1e-30);
 }
 
@@ -146,21 +164,22 @@ void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector
   RTCRayHit rh;
   init_ray(rh, org, dir, 0.0, tfar);
   rtcIntersect1(scene_, &ctx.context, &rh);
-  for (LineHit& h : out) {
-    const Plane& p = planes_[h.patch];
-    const double denom = dot(p.n, dir);
-    h.along = denom > 0;
-    if (std::fabs(denom) >= 1e-12) h.t = (p.d - dot(p.n, org)) / denom;
-  }
-  // Few hits per line: insertion sort beats std::sort here.
-  for (size_t i = 1; i < out.size(); ++i) {
-    const LineHit h = out[i];
-    size_t j = i;
-    while (j > 0 && (out[j - 1].t > h.t || (out[j - 1].t == h.t && out[j - 1].patch > h.patch))) {
-      out[j] = out[j - 1];
-      --j;
+  sort_by_distance(out.data(), out.size());
+  // Where hits come close (surfaces in contact, shared edges), Embree's
+  // single-precision distances cannot order them: recompute those in double
+  // from the patch planes, so that coplanar patches get equal distances.
+  for (size_t i = 0; i + 1 < out.size();) {
+    size_t j = i + 1;
+    while (j < out.size() && out[j].t - out[j - 1].t <= near_tie_) ++j;
+    if (j - i > 1) {
+      for (size_t k = i; k < j; ++k) {
+        const Plane& p = planes_[out[k].patch];
+        const double denom = dot(p.n, dir);
+        if (std::fabs(denom) >= 1e-12) out[k].t = (p.d - dot(p.n, org)) / denom;
+      }
+      sort_by_distance(out.data() + i, j - i);
     }
-    out[j] = h;
+    i = j;
   }
   // The same patch twice (a quad's diagonal), or coplanar patches facing the
   // same way at one distance (a shared edge): one crossing.

@@ -59,7 +59,8 @@ class Tracer {
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   double tie_epsilon_ = 0;
-  double hair_ = 0;  // a tiny fraction of the scene size
+  double hair_ = 0;      // a tiny fraction of the scene size
+  double near_tie_ = 0;  // hits closer than this get distances in double precision
 };
 
 }  // namespace mpath

@@ -29,6 +29,14 @@ TEST(Sampling, RadicalInverseMirrorsDigits) {
   EXPECT_DOUBLE_EQ(radical_inverse(1, 2), 0.5);
   EXPECT_DOUBLE_EQ(radical_inverse(6, 2), 0.375);  // 110 -> 0.011
   EXPECT_NEAR(radical_inverse(5, 3), 7.0 / 9.0, 1e-15);  // 12 -> 0.21
+  // The specialised bases give exactly the digit loop of any other base.
+  for (unsigned base : {2u, 3u, 5u, 7u})
+    for (uint64_t i : {0ull, 1ull, 12345ull, 4'000'000ull, (1ull << 40) + 977ull}) {
+      double f = 1.0 / base, expected = 0;
+      for (uint64_t k = i; k > 0; k /= base, f /= base) expected += f * static_cast<double>(k % base);
+      if (base == 2) EXPECT_DOUBLE_EQ(radical_inverse(i, base), expected) << i;
+      else EXPECT_NEAR(radical_inverse(i, base), expected, 1e-15) << base << " " << i;
+    }
 }
 
 // A square of area A inside a box of surface S is crossed by a uniform line
