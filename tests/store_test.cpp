@@ -117,6 +117,26 @@ TEST(Store, ResumeGivesTheUninterruptedResult) {
   EXPECT_NE(other.output.find("made with another scene, store or config"), std::string::npos) << other.output;
 }
 
+TEST(Store, ResumeAfterAKilledRunGivesTheUninterruptedResult) {
+  TempDir dir;
+  const std::string lines = " lines.total=1000000 store.chunk_lines=16384 first_shot.lines=400000";
+  const std::string store = " store.dir=" + (dir / "store").string();
+  ASSERT_EQ(preprocess(store + lines).exit_code, 0);
+  const std::string tol = lines + " solver.tolerance=1e-12 solver.iterations=6" + store;
+  ASSERT_EQ(solve(tol + " output.dir=" + (dir / "straight").string()).exit_code, 0);
+  // Kill (SIGKILL: nothing gets to clean up) as soon as the first checkpoint exists.
+  const auto killed = dir / "killed";
+  const std::string command = test::solve_bin() + " " + kCornell + kSmall + tol +
+                              " solver.method=multipath output.png=false -q output.dir=" + killed.string();
+  const RunResult k = test::run("bash -c '" + command + " & pid=$!; for i in $(seq 2000); do [ -f " +
+                                (killed / "checkpoint.bin").string() + " ] && break; sleep 0.005; done; kill -9 $pid; wait $pid; echo killed $?'");
+  ASSERT_NE(k.output.find("killed 137"), std::string::npos) << "the run finished before it could be killed: " << k.output;
+  EXPECT_FALSE(std::filesystem::exists(killed / "solution.ply"));
+  const RunResult r = solve(tol + " --resume output.dir=" + killed.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(test::read_file(dir / "straight/solution.ply"), test::read_file(killed / "solution.ply"));
+}
+
 TEST(Store, DamagedOrMismatchedStoresAreRefusedByName) {
   TempDir dir;
   const std::string store = (dir / "store").string();
