@@ -25,7 +25,7 @@ def main(stem, paths):
         r["cpu"] = cpu_model()
     with open(stem + ".json", "w") as f:
         json.dump(records, f, indent=2)
-    fields = ["scene", "patches", "lines", "threads", "sequence", "raw_lines_per_s", "tracer_lines_per_s", "solver_lines_per_s", "ratio",
+    fields = ["scene", "patches", "lines", "threads", "sequence", "raw_lines_per_s", "tracer_lines_per_s", "solver_lines_per_s", "ratio", "ratio_min", "ratio_max",
               "raw_hits_per_line", "commit", "cpu"]
     with open(stem + ".csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
