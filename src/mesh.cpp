@@ -203,6 +203,15 @@ PatchMesh build_mesh(const Scene& scene, double max_patch_area) {
   mesh.max_patch_area = max_patch_area > 0 ? max_patch_area : automatic_patch_area(scene);
   MPATH_CHECK(mesh.max_patch_area > 0, "scene has zero extent");
   const double eps = 1e-9 * mesh.bounds.diagonal();
+  // Refuse a patch size that would fill memory before trying: every patch
+  // costs about 200 bytes across mesh, tracer and solver.
+  double total_area = 0;
+  for (const Polygon& p : scene.polygons) total_area += polygon_area(p.vertices);
+  const double expected_patches = total_area / mesh.max_patch_area;
+  if (expected_patches > kMaxPatches)
+    throw InputError(fmt::format("config key 'mesh.max_patch_area': {} gives about {:.3g} patches for {:.4g} square units "
+                                 "of surface (at most {:.3g}); use a larger value",
+                                 mesh.max_patch_area, expected_patches, total_area, static_cast<double>(kMaxPatches)));
   MeshBuilder builder(scene, mesh);
   for (size_t i = 0; i < scene.polygons.size(); ++i) builder.add_polygon(scene.polygons[i], static_cast<int>(i), eps);
 

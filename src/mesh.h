@@ -44,6 +44,9 @@ struct PatchMesh {
   double face_area(int face) const { return patches[face_patch[face]].area; }
 };
 
+// The most patches a mesh may have (about 10 GB of memory in all).
+inline constexpr double kMaxPatches = 50e6;
+
 // Automatic patch size: the scene box's surface area / 2000.
 double automatic_patch_area(const Scene& scene);
 

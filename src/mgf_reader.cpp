@@ -35,6 +35,9 @@ struct MgfVertex {
   Vec3 n;
 };
 
+// A scene larger than this is almost surely a mistake (or hostile).
+constexpr size_t kMaxPolygons = 20'000'000;
+
 struct Entry {
   std::vector<std::string> t;
   long line = 0;
@@ -234,6 +237,12 @@ class MgfReader {
       frame.file = file_;
       frame.counts = array_counts(frame.args);
       frame.index.assign(frame.counts.size(), 0);
+      // Nested arrays multiply: refuse a bomb before running its body.
+      double copies = 1;
+      for (const XfFrame& open : xf_)
+        for (int n : open.counts) copies *= n;
+      for (int n : frame.counts) copies *= n;
+      if (copies > 1e7) fail(fmt::format("nested 'xf -a' arrays make {:.3g} copies (at most 1e7)", copies));
       frame.total = transform().after(parse_transform(frame.args, frame.index));
       xf_.push_back(std::move(frame));
       return i;
@@ -384,6 +393,8 @@ class MgfReader {
   }
 
   void add_world_polygon(std::vector<Vec3> vertices) {
+    if (scene_.polygons.size() >= kMaxPolygons)
+      fail(fmt::format("more than {} polygons (runaway 'xf -a' arrays or includes?)", kMaxPolygons));
     Polygon poly;
     poly.vertices = std::move(vertices);
     poly.material = current_scene_material();

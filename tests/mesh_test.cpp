@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "error.h"
 #include "test_util.h"
 
 namespace mpath {
@@ -84,6 +85,15 @@ TEST(Mesh, GivesTwoSidedPatchesABackFace) {
   const int back = two.patch_faces[0][1];
   EXPECT_EQ(two.face_side[back], 1);
   EXPECT_NEAR(two.face_normal(back).z, -1.0, 1e-12);
+}
+
+TEST(Mesh, RefusesAPatchSizeThatWouldFillMemory) {
+  try {
+    build_mesh(test::furnace_scene(0.5, 1.0), 1e-9);
+    FAIL() << "a patch size giving ~1e10 patches must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'mesh.max_patch_area': 1e-09 gives about"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Mesh, AutomaticPatchAreaFollowsTheSceneSize) {

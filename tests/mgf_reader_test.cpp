@@ -164,6 +164,10 @@ TEST(MgfReader, NamesFileLineAndCauseOfBadInput) {
   EXPECT_NE(mgf_error("m x =\nrd 1.5\nv a =\np 0 0 0\nv b =\np 1 0 0\nv c =\np 0 1 0\nf a b c\n").find("outside [0, 1)"),
             std::string::npos);
   EXPECT_NE(mgf_error("c x =\ncxy 0.8 0.5\n").find("outside the CIE diagram"), std::string::npos);
+  // Nested arrays of 1e5 copies each: refused at once, not run out of memory on.
+  EXPECT_NE(mgf_error("v a =\np 0 0 0\nxf -a 100000 -t 1 0 0\nxf -a 100000 -t 0 1 0\nsph a 1\nxf\nxf\n")
+                .find("e.mgf:4: nested 'xf -a' arrays make 1e+10 copies"),
+            std::string::npos);
 }
 
 TEST(MgfReader, LoadsTheRenderParkOffice) {
