@@ -21,6 +21,7 @@ namespace {
 constexpr char kMagic[8] = {'M', 'P', 'L', 'I', 'N', 'E', 'S', '\0'};
 constexpr char kEndMagic[8] = {'M', 'P', 'L', 'S', 'E', 'N', 'D', '\0'};
 constexpr size_t kHeaderBytes = 16, kFooterBytes = 40;
+constexpr uint64_t kMaxChunkBytes = 1ull << 30;
 
 std::string compress(const std::string& raw, int level) {
   ZSTD_CCtx* cctx = ZSTD_createCCtx();
@@ -181,6 +182,10 @@ BoxFileReader::BoxFileReader(const fs::path& path) : path_(path) {
     c.lines = take<uint64_t>(index, pos);
     c.events = take<uint64_t>(index, pos);
     if (c.offset < kHeaderBytes || c.offset + c.bytes > index_offset) fail(fmt::format("chunk {}: out of the file", i));
+    // Every line takes at least a byte, every event too; a chunk is well under 1 GiB.
+    if (c.raw_bytes > kMaxChunkBytes || c.lines + c.events > c.raw_bytes || c.lines == 0)
+      fail(fmt::format("chunk {}: implausible sizes in the index ({} lines, {} events, {} bytes)", i, c.lines, c.events,
+                       c.raw_bytes));
     if (i > 0 && c.first_line != expected_line) fail(fmt::format("chunk {}: lines out of sequence", i));
     expected_line = c.first_line + c.lines;
     chunks_.push_back(c);
@@ -189,6 +194,8 @@ BoxFileReader::BoxFileReader(const fs::path& path) : path_(path) {
   const auto counts_bytes = take<uint64_t>(index, pos);
   const auto counts_raw = take<uint64_t>(index, pos);
   const auto faces = take<uint64_t>(index, pos);
+  if (counts_raw > kMaxChunkBytes || faces > counts_raw || counts_offset + counts_bytes > index_offset)
+    fail("implausible crossing-count sizes in the index");
   const std::string raw = read_frame(counts_offset, counts_bytes, counts_raw, "crossing counts");
   size_t p = 0;
   face_crossings_.resize(faces);

@@ -5,6 +5,9 @@
 
 #include "box_file.h"
 #include "error.h"
+#include "hash.h"
+
+#include <cstring>
 #include "manifest.h"
 #include "test_util.h"
 
@@ -130,6 +133,25 @@ TEST(LineStore, NamesTruncatedForeignAndOtherVersionFiles) {
   patch_file(dir / "v9.lines", 8, std::string("\x09\0\0\0", 4));
   EXPECT_NE(open_error(dir / "v9.lines").find("store format version 9 (this mpath reads version 1"), std::string::npos);
   EXPECT_NE(open_error(dir / "missing.lines").find("missing.lines: missing"), std::string::npos);
+}
+
+TEST(LineStore, RefusesAHostileIndexWithImplausibleSizes) {
+  TempDir dir;
+  write_box(dir / "box.lines", 1, {1, 2});
+  // Rewrite the first chunk's raw size to 2^40 and fix the index hash, as a
+  // hostile file would: the reader must refuse it, not try to allocate it.
+  std::string file = test::read_file(dir / "box.lines");
+  uint64_t index_offset, index_bytes;
+  std::memcpy(&index_offset, file.data() + file.size() - 40, 8);
+  std::memcpy(&index_bytes, file.data() + file.size() - 32, 8);
+  const uint64_t huge = 1ull << 40;
+  std::memcpy(file.data() + index_offset + 8 + 16, &huge, 8);
+  Fnv1a h;
+  h.add(file.data() + index_offset, index_bytes);
+  const uint64_t hash = h.value();
+  std::memcpy(file.data() + file.size() - 24, &hash, 8);
+  test::write_file(dir / "box.lines", file);
+  EXPECT_NE(open_error(dir / "box.lines").find("chunk 0: implausible sizes"), std::string::npos) << open_error(dir / "box.lines");
 }
 
 TEST(Manifest, RoundTripsAndNamesTheFirstMismatch) {
