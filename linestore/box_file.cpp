@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "error.h"
+#include "interrupt.h"
 #include "hash.h"
 #include "varint.h"
 
@@ -79,6 +80,7 @@ EncodedChunk encode_chunk(const std::vector<LineRecord>& lines, uint64_t first_l
 
 BoxFileWriter::BoxFileWriter(const fs::path& path, uint32_t box)
     : path_(path), temp_(partial_path(path)), box_(box) {
+  interrupt_slot_ = remember_temporary(temp_);
   out_.open(temp_, std::ios::binary | std::ios::trunc);
   if (!out_) throw InputError(fmt::format("{}: cannot create file", temp_.string()));
   put(kMagic, sizeof kMagic);
@@ -87,6 +89,7 @@ BoxFileWriter::BoxFileWriter(const fs::path& path, uint32_t box)
 }
 
 BoxFileWriter::~BoxFileWriter() {
+  forget_temporary(interrupt_slot_);
   if (!finished_) {
     out_.close();
     std::error_code ec;

@@ -56,6 +56,7 @@ class BoxFileWriter {
   uint64_t offset_ = 0;
   std::vector<ChunkInfo> chunks_;
   bool finished_ = false;
+  int interrupt_slot_ = -1;
 };
 
 // Reads a box file: header, index and counts at open; chunks on demand, each

@@ -9,7 +9,8 @@ int main(int argc, char** argv) {
   mpath::add_common_flags(app, flags);
   app.add_option("--shard", shard, "trace part i of n (i/n) of the lines; run every part, in any order");
   CLI11_PARSE(app, argc, argv);
-  return mpath::run_program("mpath-preprocess", flags, [&](const mpath::Options& options) {
+  const char* advice = "finished shards are kept and verified; run again to finish the store";
+  return mpath::run_program("mpath-preprocess", advice, flags, [&](const mpath::Options& options) {
     mpath::run_preprocess(options, mpath::parse_shard(shard), flags.dry_run);
   });
 }

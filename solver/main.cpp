@@ -9,7 +9,8 @@ int main(int argc, char** argv) {
   mpath::add_common_flags(app, flags);
   app.add_flag("--resume", resume, "continue from the last checkpoint in output.dir");
   CLI11_PARSE(app, argc, argv);
-  return mpath::run_program("mpath-solve", flags, [&](const mpath::Options& options) {
+  const char* advice = "the passes finished so far are in output.dir/checkpoint.bin: run again with --resume";
+  return mpath::run_program("mpath-solve", advice, flags, [&](const mpath::Options& options) {
     mpath::SolveFlags solve;
     solve.resume = resume;
     solve.dry_run = flags.dry_run;

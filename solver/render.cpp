@@ -13,6 +13,7 @@
 
 #include "atomic_file.h"
 #include "error.h"
+#include "interrupt.h"
 #include "png_writer.h"
 #include "sampling.h"
 
@@ -107,6 +108,7 @@ void write_exr(const std::filesystem::path& path, const Image& image, double exp
   std::vector<float> pixels(image.rgb.size());
   for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = image.rgb[i] * scale;
   const auto temp = temporary_path(path);
+  const int slot = remember_temporary(temp);
   try {
     Imf::Header header(image.width, image.height);
     header.compression() = Imf::ZIP_COMPRESSION;
@@ -125,8 +127,10 @@ void write_exr(const std::filesystem::path& path, const Image& image, double exp
   } catch (const std::exception& e) {
     std::error_code ec;
     std::filesystem::remove(temp, ec);
+    forget_temporary(slot);
     throw InputError(fmt::format("{}: writing the EXR image failed: {}", path.string(), e.what()));
   }
+  forget_temporary(slot);
   commit_temporary(temp, path);
 }
 

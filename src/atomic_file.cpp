@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "error.h"
+#include "interrupt.h"
 
 namespace mpath {
 
@@ -26,11 +27,13 @@ void commit_temporary(const fs::path& temp, const fs::path& final_path) {
 }
 
 AtomicFile::AtomicFile(const fs::path& final_path) : final_(final_path), temp_(temporary_path(final_path)) {
+  interrupt_slot_ = remember_temporary(temp_);
   out_.open(temp_, std::ios::binary | std::ios::trunc);
   if (!out_) throw InputError(fmt::format("{}: cannot create file: {}", temp_.string(), std::strerror(errno)));
 }
 
 AtomicFile::~AtomicFile() {
+  forget_temporary(interrupt_slot_);
   if (!committed_) {
     out_.close();
     std::error_code ec;

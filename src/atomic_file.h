@@ -24,6 +24,7 @@ class AtomicFile {
   std::filesystem::path final_, temp_;
   std::ofstream out_;
   bool committed_ = false;
+  int interrupt_slot_ = -1;
 };
 
 // Temporary name beside `final_path` for writers that need a path (EXR).

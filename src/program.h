@@ -13,6 +13,7 @@
 
 #include "config.h"
 #include "error.h"
+#include "interrupt.h"
 #include "progress.h"
 
 namespace mpath {
@@ -34,10 +35,12 @@ inline void add_common_flags(CLI::App& app, ProgramFlags& f) {
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
 }
 
-// Sets up logging, loads the config, prints it (--print-config: only that)
+// Sets up logging and interrupt handling (`advice`: what to do after an
+// interruption), loads the config, prints it (--print-config: only that)
 // and runs `body`; bad input exits 1 and anything else 2, with one line on stderr.
 template <typename Body>
-int run_program(const char* name, const ProgramFlags& f, Body body) {
+int run_program(const char* name, const char* advice, const ProgramFlags& f, Body body) {
+  install_interrupt_handlers(name, advice);
   spdlog::set_default_logger(spdlog::stderr_logger_mt("mpath"));
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
   spdlog::set_level(f.quiet ? spdlog::level::warn : spdlog::level::from_str(f.log_level));

@@ -137,6 +137,29 @@ TEST(Store, ResumeAfterAKilledRunGivesTheUninterruptedResult) {
   EXPECT_EQ(test::read_file(dir / "straight/solution.ply"), test::read_file(killed / "solution.ply"));
 }
 
+bool has_hidden_temporaries(const std::filesystem::path& dir) {
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.find(".partial") != std::string::npos || name.find(".tmp.") != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(Store, InterruptedProgramsRemoveTheirTemporariesAndSayWhatToDo) {
+  TempDir dir;
+  const auto store = dir / "store";
+  // Interrupt preprocessing while it traces (the partial file exists).
+  const std::string pre = bin("mpath-preprocess") + " " + kCornell + " -q lines.total=50000000 store.dir=" + store.string();
+  RunResult r = test::run("bash -c '" + pre + " & pid=$!; for i in $(seq 2000); do [ -f " +
+                          (store / ".box0000.lines.partial").string() +
+                          " ] && break; sleep 0.005; done; sleep 0.2; kill -INT $pid; wait $pid; echo exit $?'");
+  EXPECT_NE(r.output.find("mpath-preprocess: interrupted; finished shards are kept"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("exit 130"), std::string::npos) << r.output;
+  EXPECT_FALSE(has_hidden_temporaries(store));
+  EXPECT_FALSE(std::filesystem::exists(store / "manifest.json"));
+  EXPECT_FALSE(std::filesystem::exists(store / "box0000.lines"));
+}
+
 TEST(Store, DamagedOrMismatchedStoresAreRefusedByName) {
   TempDir dir;
   const std::string store = (dir / "store").string();
