@@ -64,12 +64,6 @@ void run_solve(const Options& options, const SolveFlags& flags) {
 
   PreparedScene prepared = prepare_scene(options);
   const PatchMesh& mesh = prepared.mesh;
-  if (flags.dry_run) {
-    spdlog::info("dry run: config and scene are valid; nothing solved");
-    return;
-  }
-  std::filesystem::create_directories(options.output.dir);
-
   // A stored-line solve checks its store before any work.
   std::unique_ptr<StoredLines> store;
   if (options.solver.method == "multipath") {
@@ -77,6 +71,11 @@ void run_solve(const Options& options, const SolveFlags& flags) {
     spdlog::info("store {}: {} lines, {} events, {:.1f} MB", options.store.dir.string(), store->lines(), store->events(),
                  store->bytes() / 1e6);
   }
+  if (flags.dry_run) {
+    spdlog::info("dry run: config, scene{} are valid; nothing solved", store ? " and store" : "");
+    return;
+  }
+  std::filesystem::create_directories(options.output.dir);
 
   auto t = clock::now();
   const Tracer tracer(mesh);

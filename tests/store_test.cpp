@@ -193,6 +193,8 @@ TEST(Store, DamagedOrMismatchedStoresAreRefusedByName) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("box0000.lines: missing"), std::string::npos) << r.output;
 
+  r = solve("store.dir=" + (dir / "nothing").string() + " --dry-run" + out);
+  EXPECT_NE(r.exit_code, 0);  // a dry run checks the store too
   r = solve("store.dir=" + (dir / "nothing").string() + out);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("manifest.json: missing; run mpath-preprocess"), std::string::npos) << r.output;
