@@ -63,6 +63,11 @@ std::string checkpoint_key(const Options& options, const PatchMesh& mesh, int th
   o.output = {};
   o.cameras.clear();
   o.store.zstd_level = 0;
+  // Where files live does not change the state (their contents are hashed below);
+  // the thread count is added as the effective one.
+  o.store.dir.clear();
+  o.scene.file.clear();
+  o.solver.threads = 0;
   Fnv1a h;
   h.add(options_to_toml(o));
   h.add(hash_file(options.scene.file));
@@ -99,7 +104,9 @@ void read_checkpoint(const std::filesystem::path& path, const std::string& key, 
                      IterationLog& log) {
   Reader in(path);
   if (in.get_string(sizeof kMagic) != std::string(kMagic, sizeof kMagic)) in.fail("not an mpath checkpoint");
-  const std::string stored = in.get_string(in.get<uint64_t>() & 0xFF);
+  const auto key_bytes = in.get<uint64_t>();
+  if (key_bytes != key.size()) in.fail("unexpected key length");
+  const std::string stored = in.get_string(key_bytes);
   if (stored != key)
     throw InputError(fmt::format("{}: made with another scene, store or config (only solver.iterations, "
                                  "solver.tolerance and outputs may change on --resume); run without --resume",
