@@ -7,7 +7,6 @@
 #include <sstream>
 
 #include "error.h"
-#include "interrupt.h"
 #include "hash.h"
 #include "varint.h"
 
@@ -78,28 +77,15 @@ EncodedChunk encode_chunk(const std::vector<LineRecord>& lines, uint64_t first_l
   return compress_chunk(raw, first_line, lines.size(), events, level);
 }
 
-BoxFileWriter::BoxFileWriter(const fs::path& path, uint32_t box)
-    : path_(path), temp_(partial_path(path)), box_(box) {
-  interrupt_slot_ = remember_temporary(temp_);
-  out_.open(temp_, std::ios::binary | std::ios::trunc);
-  if (!out_) throw InputError(fmt::format("{}: cannot create file", temp_.string()));
+BoxFileWriter::BoxFileWriter(const fs::path& path, uint32_t box) : file_(path, partial_path(path)), box_(box) {
   put(kMagic, sizeof kMagic);
   put(&kFormatVersion, 4);
   put(&box_, 4);
 }
 
-BoxFileWriter::~BoxFileWriter() {
-  forget_temporary(interrupt_slot_);
-  if (!finished_) {
-    out_.close();
-    std::error_code ec;
-    fs::remove(temp_, ec);
-  }
-}
-
 void BoxFileWriter::put(const void* data, size_t size) {
-  out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
-  if (!out_) throw InputError(fmt::format("{}: writing failed (disk full?)", temp_.string()));
+  file_.stream().write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+  if (!file_.stream()) throw InputError(fmt::format("{}: writing failed (disk full?)", file_.temp_path().string()));
   offset_ += size;
 }
 
@@ -132,13 +118,7 @@ void BoxFileWriter::finish(const std::vector<uint32_t>& face_crossings) {
   for (uint64_t v : {index_offset, static_cast<uint64_t>(index.size()), h.value(), uint64_t{0}}) append(footer, v);
   footer.append(kEndMagic, sizeof kEndMagic);
   put(footer.data(), footer.size());
-  out_.flush();
-  out_.close();
-  if (out_.fail()) throw InputError(fmt::format("{}: writing failed (disk full?)", temp_.string()));
-  std::error_code ec;
-  fs::rename(temp_, path_, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot move finished file into place: {}", path_.string(), ec.message()));
-  finished_ = true;
+  file_.commit();
 }
 
 BoxFileReader::BoxFileReader(const fs::path& path) : path_(path) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "atomic_file.h"
 #include "line_record.h"
 
 namespace mpath::linestore {
@@ -43,20 +44,16 @@ EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_
 class BoxFileWriter {
  public:
   BoxFileWriter(const std::filesystem::path& path, uint32_t box);
-  ~BoxFileWriter();
   void write(const EncodedChunk& chunk);
   // Per-face crossing counts of the file's lines, then the index; renames.
   void finish(const std::vector<uint32_t>& face_crossings);
 
  private:
   void put(const void* data, size_t size);
-  std::filesystem::path path_, temp_;
-  std::ofstream out_;
+  AtomicFile file_;
   uint32_t box_;
   uint64_t offset_ = 0;
   std::vector<ChunkInfo> chunks_;
-  bool finished_ = false;
-  int interrupt_slot_ = -1;
 };
 
 // Reads a box file: header, index and counts at open; chunks on demand, each

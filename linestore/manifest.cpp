@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "atomic_file.h"
 #include "box_file.h"
 #include "error.h"
 
@@ -21,20 +22,9 @@ void write_manifest(const fs::path& path, const Manifest& m) {
                   {"identity", m.identity},             {"patches", m.patches},
                   {"faces", m.faces},                   {"lines_total", m.lines_total},
                   {"chunk_lines", m.chunk_lines},       {"files", files}};
-  const fs::path temp = partial_path(path);
-  {
-    std::ofstream out(temp, std::ios::trunc);
-    out << j.dump(2) << "\n";
-    out.close();
-    if (out.fail()) {
-      std::error_code ec;
-      fs::remove(temp, ec);
-      throw InputError(fmt::format("{}: writing failed (disk full?)", path.string()));
-    }
-  }
-  std::error_code ec;
-  fs::rename(temp, path, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot move finished file into place: {}", path.string(), ec.message()));
+  AtomicFile file(path, partial_path(path));
+  file.stream() << j.dump(2) << "\n";
+  file.commit();
 }
 
 Manifest read_manifest(const fs::path& path) {

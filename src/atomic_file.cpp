@@ -26,7 +26,9 @@ void commit_temporary(const fs::path& temp, const fs::path& final_path) {
   }
 }
 
-AtomicFile::AtomicFile(const fs::path& final_path) : final_(final_path), temp_(temporary_path(final_path)) {
+AtomicFile::AtomicFile(const fs::path& final_path) : AtomicFile(final_path, temporary_path(final_path)) {}
+
+AtomicFile::AtomicFile(const fs::path& final_path, const fs::path& temp_path) : final_(final_path), temp_(temp_path) {
   interrupt_slot_ = remember_temporary(temp_);
   out_.open(temp_, std::ios::binary | std::ios::trunc);
   if (!out_) throw InputError(fmt::format("{}: cannot create file: {}", temp_.string(), std::strerror(errno)));

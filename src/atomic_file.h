@@ -10,6 +10,8 @@ namespace mpath {
 class AtomicFile {
  public:
   explicit AtomicFile(const std::filesystem::path& final_path);
+  // The same with a chosen temporary name (beside the final one).
+  AtomicFile(const std::filesystem::path& final_path, const std::filesystem::path& temp_path);
   ~AtomicFile();  // removes the temporary file unless committed
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
