@@ -78,7 +78,6 @@ uint64_t tracer_pass(const Tracer& tracer, const PatchMesh& mesh, uint64_t lines
                      int shards, const std::string& sequence) {
   const LineSequence points(sequence, seed, pass);
   const BoxLineSampler sampler(line_box(mesh.bounds));
-  const double tie_epsilon = 1e-7 * mesh.bounds.diagonal();
   std::vector<uint64_t> hits(shards, 0);
   tbb::parallel_for(0, shards, [&](int s) {
     Rng rng = make_rng(seed, 2, (static_cast<unsigned long long>(pass) << 20) + s);
@@ -88,7 +87,7 @@ uint64_t tracer_pass(const Tracer& tracer, const PatchMesh& mesh, uint64_t lines
       points.point(i, rng, u);
       const GlobalLine line = sampler.sample(u);
       tracer.all_hits(line.org, line.dir, line.length, found);
-      order_ties(mesh, tie_epsilon, found);
+      order_ties(mesh, tracer.tie_epsilon(), found);
       hits[s] += found.size();
     }
   });

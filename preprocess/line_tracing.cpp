@@ -18,8 +18,7 @@ ChunkTracer::ChunkTracer(const Options& options, const PatchMesh& mesh, const Tr
       seed_(options.lines.seed),
       total_(static_cast<uint64_t>(options.lines.total)),
       chunk_lines_(static_cast<uint64_t>(options.store.chunk_lines)),
-      chunks_((total_ + chunk_lines_ - 1) / chunk_lines_),
-      tie_epsilon_(1e-7 * mesh.bounds.diagonal()) {}
+      chunks_((total_ + chunk_lines_ - 1) / chunk_lines_) {}
 
 uint64_t ChunkTracer::lines_in(uint64_t chunk) const {
   return std::min(chunk_lines_, total_ - first_line(chunk));
@@ -35,7 +34,7 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
     sequence_.point(first + i, rng, u);
     const GlobalLine line = sampler_.sample(u);
     tracer_.all_hits(line.org, line.dir, line.length, hits);
-    order_ties(mesh_, tie_epsilon_, hits);
+    order_ties(mesh_, tracer_.tie_epsilon(), hits);
     linestore::LineRecord& record = out[i];
     record.events.clear();
     for (const LineHit& h : hits) {

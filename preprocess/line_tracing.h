@@ -28,7 +28,6 @@ class ChunkTracer {
   LineSequence sequence_;
   unsigned long long seed_;
   uint64_t total_, chunk_lines_, chunks_;
-  double tie_epsilon_;
 };
 
 }  // namespace mpath

@@ -37,7 +37,6 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
   const PassInputs in = PassInputs::start(state, mesh, forecast_crossings(mesh, static_cast<double>(lines)));
 
   std::vector<ShardAccumulator> acc(shards);
-  const double tie_epsilon = 1e-7 * mesh.bounds.diagonal();
   Progress progress(fmt::format("pass {}", pass), lines, "lines", true);
   tbb::parallel_for(0, shards, [&](int s) {
     const uint64_t lo = lines * s / shards, hi = lines * (s + 1) / shards;
@@ -52,7 +51,7 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
       points.point(i, rng, u);
       const GlobalLine line = sampler.sample(u);
       tracer.all_hits(line.org, line.dir, line.length, hits);
-      order_ties(mesh, tie_epsilon, hits);
+      order_ties(mesh, tracer.tie_epsilon(), hits);
       transport_line(in, hits, a);
       if (++since_report == 4096) {
         progress.advance(since_report);

@@ -399,7 +399,6 @@ class MgfReader {
     poly.vertices = std::move(vertices);
     poly.material = current_scene_material();
     poly.object = current_object();
-    poly.source_line = line_;
     scene_.polygons.push_back(std::move(poly));
   }
 

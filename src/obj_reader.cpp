@@ -92,7 +92,6 @@ Scene read_obj(const fs::path& path) {
       Polygon poly;
       poly.material = material;
       poly.object = object;
-      poly.source_line = in.line();
       for (size_t i = 1; i < t.size(); ++i) poly.vertices.push_back(positions[vertex_index(in, t[i], positions.size())]);
       scene.polygons.push_back(std::move(poly));
     } else if (key == "o" || key == "g") {

@@ -255,7 +255,6 @@ Scene read_ply(const fs::path& path) {
       scene.materials.push_back(m);
     }
     poly.material = mit->second;
-    poly.source_line = static_cast<long>(i);
     scene.polygons.push_back(std::move(poly));
   }
   return scene;

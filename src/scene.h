@@ -24,7 +24,6 @@ struct Polygon {
   std::vector<Vec3> vertices;
   int material = 0;
   int object = 0;
-  long source_line = 0;  // line in the scene file, for messages
 };
 
 struct SceneObject {

@@ -172,11 +172,7 @@ void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector
     size_t j = i + 1;
     while (j < out.size() && out[j].t - out[j - 1].t <= near_tie_) ++j;
     if (j - i > 1) {
-      for (size_t k = i; k < j; ++k) {
-        const Plane& p = planes_[out[k].patch];
-        const double denom = dot(p.n, dir);
-        if (std::fabs(denom) >= 1e-12) out[k].t = (p.d - dot(p.n, org)) / denom;
-      }
+      for (size_t k = i; k < j; ++k) out[k].t = plane_distance(out[k].patch, org, dir, out[k].t);
       sort_by_distance(out.data() + i, j - i);
     }
     i = j;

@@ -46,6 +46,9 @@ class Tracer {
   double plane_distance(int patch, const Vec3& org, const Vec3& dir, double fallback) const;
 
   static std::string embree_version();
+  // Crossings closer than this along a line are at one distance (surfaces in contact).
+  double tie_epsilon() const { return tie_epsilon_; }
+
   // The Embree scene, for benchmarks that measure Embree alone.
   RTCScene embree_scene() const { return scene_; }
 

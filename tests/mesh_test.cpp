@@ -12,7 +12,7 @@ Scene one_polygon(std::vector<Vec3> vertices, bool two_sided = false) {
   Scene s;
   test::add_material(s, "m", 0.5, 0.0, two_sided);
   test::add_object(s, "o");
-  s.polygons.push_back(Polygon{std::move(vertices), 0, 0, 1});
+  s.polygons.push_back(Polygon{std::move(vertices), 0, 0});
   return s;
 }
 
@@ -69,8 +69,8 @@ TEST(Mesh, TriangulatesAConcavePolygonWithoutChangingItsArea) {
 
 TEST(Mesh, DropsAndCountsDegeneratePolygons) {
   Scene s = one_polygon({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}});  // collinear
-  s.polygons.push_back(Polygon{{{0, 0, 0}, {0, 0, 0}, {1, 1, 0}}, 0, 0, 2});  // repeated corner
-  s.polygons.push_back(Polygon{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, 0, 0, 3});
+  s.polygons.push_back(Polygon{{{0, 0, 0}, {0, 0, 0}, {1, 1, 0}}, 0, 0});  // repeated corner
+  s.polygons.push_back(Polygon{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, 0, 0});
   const PatchMesh m = build_mesh(s, 1.0);
   EXPECT_EQ(m.dropped_polygons, 2u);
   EXPECT_EQ(m.patches.size(), 1u);

@@ -66,7 +66,7 @@ int add_object(Scene& scene, const std::string& name) {
 }
 
 void add_quad(Scene& scene, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d, int material, int object) {
-  scene.polygons.push_back(Polygon{{a, b, c, d}, material, object, 0});
+  scene.polygons.push_back(Polygon{{a, b, c, d}, material, object});
 }
 
 void add_box(Scene& scene, const Vec3& lo, const Vec3& hi, bool inward, int material, int object) {
