@@ -95,7 +95,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   } else {
     if (flags.resume) spdlog::warn("--resume: no checkpoint at {}; starting from the beginning", checkpoint.string());
     std::vector<double> crossings;
-    if (store) crossings.assign(store->crossings().begin(), store->crossings().end());
+    if (store) crossings = store->crossings();
     else crossings = forecast_crossings(mesh, static_cast<double>(options.lines.total));
     shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, threads,
                       emitter_crossings(options, std::move(crossings)));

@@ -68,8 +68,7 @@ void StoredLines::read(uint64_t chunk, Cursor& cursor, linestore::DecodedChunk& 
 
 PassStats stored_pass(const PatchMesh& mesh, const StoredLines& store, RadiosityState& state, unsigned pass, int shards) {
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<double> crossings(store.crossings().begin(), store.crossings().end());
-  const PassInputs in = PassInputs::start(state, mesh, crossings);
+  const PassInputs in = PassInputs::start(state, mesh, store.crossings());
 
   std::vector<ShardAccumulator> acc(shards);
   const uint64_t chunks = store.chunk_count();

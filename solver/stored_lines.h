@@ -21,7 +21,8 @@ class StoredLines {
   StoredLines(const Options& options, const PatchMesh& mesh);
 
   const linestore::Manifest& manifest() const { return manifest_; }
-  const std::vector<uint32_t>& crossings() const { return crossings_; }
+  // Exact crossings of every face by the stored lines (as the pass uses them).
+  const std::vector<double>& crossings() const { return crossings_; }
   uint64_t chunk_count() const { return chunk_file_.size(); }
   uint64_t lines() const { return manifest_.lines_total; }
   uint64_t events() const;
@@ -38,7 +39,7 @@ class StoredLines {
   linestore::Manifest manifest_;
   std::vector<std::filesystem::path> files_;
   std::vector<std::pair<uint32_t, uint32_t>> chunk_file_;  // global chunk -> (file, chunk in file)
-  std::vector<uint32_t> crossings_;
+  std::vector<double> crossings_;
 };
 
 // One pass over every stored line: each face sends exactly its unshot power,
