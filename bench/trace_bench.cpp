@@ -36,23 +36,37 @@ void raw_filter(const RTCFilterFunctionNArguments* args) {
   args->valid[0] = 0;
 }
 
-// Embree alone: the same lines as classic_pass draws, every hit collected, nothing else.
-uint64_t raw_pass(const Tracer& tracer, const PatchMesh& mesh, uint64_t lines, unsigned long long seed, unsigned pass,
-                  int shards, const std::string& sequence) {
+// The lines classic_pass draws, split into the same shards; `trace(shard,
+// line)` returns the hits of a line. Returns the hits in all.
+template <typename Trace>
+uint64_t over_lines(const PatchMesh& mesh, uint64_t lines, unsigned long long seed, unsigned pass, int shards,
+                    const std::string& sequence, Trace trace) {
   const LineSequence points(sequence, seed, pass);
   const BoxLineSampler sampler(line_box(mesh.bounds));
   std::vector<uint64_t> hits(shards, 0);
   tbb::parallel_for(0, shards, [&](int s) {
     Rng rng = make_rng(seed, 2, (static_cast<unsigned long long>(pass) << 20) + s);
-    std::vector<std::pair<float, unsigned>> found;
-    RawContext ctx;
-    rtcInitIntersectContext(&ctx.context);
-    ctx.context.filter = raw_filter;
-    ctx.hits = &found;
+    auto shard_trace = trace();  // per-shard state
     for (uint64_t i = lines * s / shards; i < lines * (s + 1) / shards; ++i) {
       double u[4];
       points.point(i, rng, u);
-      const GlobalLine line = sampler.sample(u);
+      hits[s] += shard_trace(sampler.sample(u));
+    }
+  });
+  uint64_t total = 0;
+  for (uint64_t h : hits) total += h;
+  return total;
+}
+
+// Embree alone: every hit collected, nothing else.
+uint64_t raw_pass(const Tracer& tracer, const PatchMesh& mesh, uint64_t lines, unsigned long long seed, unsigned pass,
+                  int shards, const std::string& sequence) {
+  return over_lines(mesh, lines, seed, pass, shards, sequence, [&] {
+    return [&tracer, found = std::vector<std::pair<float, unsigned>>()](const GlobalLine& line) mutable -> uint64_t {
+      RawContext ctx;
+      rtcInitIntersectContext(&ctx.context);
+      ctx.context.filter = raw_filter;
+      ctx.hits = &found;
       RTCRayHit rh{};
       rh.ray.org_x = static_cast<float>(line.org.x);
       rh.ray.org_y = static_cast<float>(line.org.y);
@@ -65,35 +79,21 @@ uint64_t raw_pass(const Tracer& tracer, const PatchMesh& mesh, uint64_t lines, u
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       found.clear();
       rtcIntersect1(tracer.embree_scene(), &ctx.context, &rh);
-      hits[s] += found.size();
-    }
+      return found.size();
+    };
   });
-  uint64_t total = 0;
-  for (uint64_t h : hits) total += h;
-  return total;
 }
 
 // mpath's tracer without transport: all hits, sorted, de-duplicated, ties ordered.
 uint64_t tracer_pass(const Tracer& tracer, const PatchMesh& mesh, uint64_t lines, unsigned long long seed, unsigned pass,
                      int shards, const std::string& sequence) {
-  const LineSequence points(sequence, seed, pass);
-  const BoxLineSampler sampler(line_box(mesh.bounds));
-  std::vector<uint64_t> hits(shards, 0);
-  tbb::parallel_for(0, shards, [&](int s) {
-    Rng rng = make_rng(seed, 2, (static_cast<unsigned long long>(pass) << 20) + s);
-    std::vector<LineHit> found;
-    for (uint64_t i = lines * s / shards; i < lines * (s + 1) / shards; ++i) {
-      double u[4];
-      points.point(i, rng, u);
-      const GlobalLine line = sampler.sample(u);
+  return over_lines(mesh, lines, seed, pass, shards, sequence, [&] {
+    return [&tracer, &mesh, found = std::vector<LineHit>()](const GlobalLine& line) mutable -> uint64_t {
       tracer.all_hits(line.org, line.dir, line.length, found);
       order_ties(mesh, tracer.tie_epsilon(), found);
-      hits[s] += found.size();
-    }
+      return found.size();
+    };
   });
-  uint64_t total = 0;
-  for (uint64_t h : hits) total += h;
-  return total;
 }
 
 double median(std::vector<double> v) {
