@@ -2,6 +2,7 @@
 
 #include <zstd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
 #include <sstream>
@@ -96,9 +97,69 @@ void BoxFileWriter::write(const EncodedChunk& chunk) {
   chunks_.push_back(info);
 }
 
-void BoxFileWriter::finish(const std::vector<uint32_t>& face_crossings) {
+void BoxCounts::resize(size_t patches, size_t wall_ars, size_t child_ars) {
+  patch_crossings.assign(patches, 0);
+  wall_lines.assign(wall_ars, 0);
+  wall_open.assign(wall_ars, 0);
+  child_crossings.assign(child_ars, 0);
+  associated.assign(wall_ars * kAssociated * 2, 0);
+}
+
+void BoxCounts::add(const BoxCounts& o) {
+  auto sum = [](std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
+    if (a.size() != b.size()) throw InputError("box counts of different sizes cannot be added");
+    for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+  };
+  sum(patch_crossings, o.patch_crossings);
+  sum(wall_lines, o.wall_lines);
+  sum(wall_open, o.wall_open);
+  sum(child_crossings, o.child_crossings);
+  if (associated.size() != o.associated.size()) throw InputError("box counts of different sizes cannot be added");
+  std::vector<std::pair<uint64_t, uint32_t>> tallies;
+  for (const BoxCounts* c : {static_cast<const BoxCounts*>(this), &o})
+    for (size_t i = 0; i < c->associated.size(); i += 2)
+      if (c->associated[i] > 0) {
+        const uint32_t ar = static_cast<uint32_t>(i / (2 * kAssociated));
+        tallies.push_back({associated_key(ar, c->associated[i] - 1), c->associated[i + 1]});
+      }
+  std::sort(tallies.begin(), tallies.end());
+  size_t kept = 0;  // the same (AR, patch) from both: one tally
+  for (size_t i = 0; i < tallies.size(); ++i) {
+    if (kept > 0 && tallies[kept - 1].first == tallies[i].first) tallies[kept - 1].second += tallies[i].second;
+    else tallies[kept++] = tallies[i];
+  }
+  tallies.resize(kept);
+  select_associated(tallies, *this);
+}
+
+void select_associated(const std::vector<std::pair<uint64_t, uint32_t>>& tallies, BoxCounts& counts) {
+  const size_t ars = counts.wall_lines.size();
+  std::vector<std::vector<std::pair<uint32_t, uint32_t>>> per_ar(ars);  // (count, patch)
+  for (const auto& [key, n] : tallies) {
+    const uint32_t ar = static_cast<uint32_t>(key >> 32);
+    if (ar < ars) per_ar[ar].push_back({n, static_cast<uint32_t>(key & 0xFFFFFFFFu)});
+  }
+  counts.associated.assign(ars * BoxCounts::kAssociated * 2, 0);
+  for (size_t ar = 0; ar < ars; ++ar) {
+    auto& list = per_ar[ar];
+    // Most often met first; equal counts by patch index, so the choice is fixed.
+    std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) {
+      return a.first != b.first ? a.first > b.first : a.second < b.second;
+    });
+    for (size_t k = 0; k < std::min(list.size(), BoxCounts::kAssociated); ++k) {
+      counts.associated[(ar * BoxCounts::kAssociated + k) * 2] = list[k].second + 1;
+      counts.associated[(ar * BoxCounts::kAssociated + k) * 2 + 1] = list[k].first;
+    }
+  }
+}
+
+void BoxFileWriter::finish(const BoxCounts& box_counts) {
   std::string counts_raw;
-  for (uint32_t c : face_crossings) put_varint(counts_raw, c);
+  const std::vector<uint32_t>* arrays[] = {&box_counts.patch_crossings, &box_counts.wall_lines, &box_counts.wall_open,
+                                           &box_counts.child_crossings, &box_counts.associated};
+  for (const auto* a : arrays) put_varint(counts_raw, a->size());
+  for (const auto* a : arrays)
+    for (uint32_t c : *a) put_varint(counts_raw, c);
   const std::string counts = compress(counts_raw, 3);
   const uint64_t counts_offset = offset_;
   put(counts.data(), counts.size());
@@ -108,7 +169,7 @@ void BoxFileWriter::finish(const std::vector<uint32_t>& face_crossings) {
   for (const ChunkInfo& c : chunks_)
     for (uint64_t v : {c.offset, c.bytes, c.raw_bytes, c.first_line, c.lines, c.events}) append(index, v);
   for (uint64_t v : {counts_offset, static_cast<uint64_t>(counts.size()), static_cast<uint64_t>(counts_raw.size()),
-                     static_cast<uint64_t>(face_crossings.size())})
+                     uint64_t{0}})
     append(index, v);
   const uint64_t index_offset = offset_;
   put(index.data(), index.size());
@@ -176,18 +237,28 @@ BoxFileReader::BoxFileReader(const fs::path& path) : path_(path) {
   const auto counts_offset = take<uint64_t>(index, pos);
   const auto counts_bytes = take<uint64_t>(index, pos);
   const auto counts_raw = take<uint64_t>(index, pos);
-  const auto faces = take<uint64_t>(index, pos);
-  if (counts_raw > kMaxChunkBytes || faces > counts_raw || counts_offset + counts_bytes > index_offset)
+  take<uint64_t>(index, pos);  // reserved
+  if (counts_raw > kMaxChunkBytes || counts_offset + counts_bytes > index_offset)
     fail("implausible crossing-count sizes in the index");
   const std::string raw = read_frame(counts_offset, counts_bytes, counts_raw, "crossing counts");
+  const auto* bytes = reinterpret_cast<const unsigned char*>(raw.data());
   size_t p = 0;
-  face_crossings_.resize(faces);
-  for (uint64_t f = 0; f < faces; ++f) {
-    uint64_t v;
-    if (!get_varint(reinterpret_cast<const unsigned char*>(raw.data()), raw.size(), p, v) || v > 0xFFFFFFFFull)
-      fail("damaged crossing counts");
-    face_crossings_[f] = static_cast<uint32_t>(v);
+  std::vector<uint32_t>* arrays[] = {&counts_.patch_crossings, &counts_.wall_lines, &counts_.wall_open,
+                                     &counts_.child_crossings, &counts_.associated};
+  uint64_t sizes[5];
+  for (uint64_t& n : sizes)
+    if (!get_varint(bytes, raw.size(), p, n) || n > raw.size()) fail("damaged crossing counts (sizes)");
+  for (int a = 0; a < 5; ++a) {
+    arrays[a]->resize(sizes[a]);
+    for (uint32_t& c : *arrays[a]) {
+      uint64_t v;
+      if (!get_varint(bytes, raw.size(), p, v) || v > 0xFFFFFFFFull) fail("damaged crossing counts");
+      c = static_cast<uint32_t>(v);
+    }
   }
+  if (p != raw.size() || counts_.wall_open.size() != counts_.wall_lines.size() ||
+      counts_.associated.size() != counts_.wall_lines.size() * BoxCounts::kAssociated * 2)
+    fail("damaged crossing counts (inconsistent sizes)");
 }
 
 void BoxFileReader::fail(const std::string& what) const {

@@ -14,7 +14,30 @@
 
 namespace mpath::linestore {
 
-inline constexpr uint32_t kFormatVersion = 1;
+inline constexpr uint32_t kFormatVersion = 2;
+
+// What a box file's lines tell about its box, besides the lines themselves
+// (design.md section 6), all counted from the file's lines.
+struct BoxCounts {
+  static constexpr size_t kAssociated = 4;  // associated patches kept per AR
+  std::vector<uint32_t> patch_crossings;    // per patch of the box (its faces are met this often)
+  std::vector<uint32_t> wall_lines;         // n_R: line ends at each AR of the box's walls
+  std::vector<uint32_t> wall_open;          // n_R^d: of those, lines meeting nothing inside
+  std::vector<uint32_t> child_crossings;    // per AR of each child box, in child order
+  // Per wall AR, kAssociated (patch + 1, count) pairs: the patches most often
+  // met first by lines entering there, most often first (patch + 1 = 0: none).
+  std::vector<uint32_t> associated;
+
+  void resize(size_t patches, size_t wall_ars, size_t child_ars);
+  // Adds the counts of `other` (another shard of the same box); associated
+  // patches are merged by their counts.
+  void add(const BoxCounts& other);
+  bool operator==(const BoxCounts&) const = default;
+};
+
+// Top associated patches from (AR, patch) -> count tallies.
+void select_associated(const std::vector<std::pair<uint64_t, uint32_t>>& tallies, BoxCounts& counts);
+inline uint64_t associated_key(uint32_t ar, uint32_t patch) { return (uint64_t{ar} << 32) | patch; }
 
 // Where a store file is written before it is complete: a hidden name beside it.
 std::filesystem::path partial_path(const std::filesystem::path& path);
@@ -45,8 +68,8 @@ class BoxFileWriter {
  public:
   BoxFileWriter(const std::filesystem::path& path, uint32_t box);
   void write(const EncodedChunk& chunk);
-  // Per-face crossing counts of the file's lines, then the index; renames.
-  void finish(const std::vector<uint32_t>& face_crossings);
+  // The box's counts from the file's lines, then the index; renames.
+  void finish(const BoxCounts& counts);
 
  private:
   void put(const void* data, size_t size);
@@ -63,7 +86,7 @@ class BoxFileReader {
   explicit BoxFileReader(const std::filesystem::path& path);
   uint32_t box() const { return box_; }
   const std::vector<ChunkInfo>& chunks() const { return chunks_; }
-  const std::vector<uint32_t>& face_crossings() const { return face_crossings_; }
+  const BoxCounts& counts() const { return counts_; }
   uint64_t lines() const;
   uint64_t events() const;
   void read_chunk(size_t index, DecodedChunk& out);
@@ -77,7 +100,7 @@ class BoxFileReader {
   uint64_t size_ = 0;
   uint32_t box_ = 0;
   std::vector<ChunkInfo> chunks_;
-  std::vector<uint32_t> face_crossings_;
+  BoxCounts counts_;
   std::string compressed_, raw_;
 };
 

@@ -23,6 +23,19 @@ struct StoreFile {
   std::string hash;  // FNV-1a 64 of the whole file
 };
 
+// One box of the hierarchy as the store records it (the solver rebuilds the
+// hierarchy from the scene and checks it against these).
+struct BoxEntry {
+  int parent = -1;
+  int depth = 0;
+  double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  uint64_t lines = 0;    // lines traced for this box
+  uint64_t patches = 0;  // patches directly in it
+  uint64_t ars = 0;      // ARs of its walls
+  uint64_t objects = 0;  // objects in it and its children
+  double quotient = 0;
+};
+
 struct Manifest {
   uint32_t format_version = 0;
   std::string mpath_version;
@@ -32,6 +45,7 @@ struct Manifest {
   uint64_t faces = 0;
   uint64_t lines_total = 0;
   uint64_t chunk_lines = 0;
+  std::vector<BoxEntry> boxes;
   std::vector<StoreFile> files;
 };
 

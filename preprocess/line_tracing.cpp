@@ -10,37 +10,119 @@ namespace {
 constexpr unsigned kStoreLineStream = 5;
 }
 
-ChunkTracer::ChunkTracer(const Options& options, const PatchMesh& mesh, const Tracer& tracer)
-    : mesh_(mesh),
-      tracer_(tracer),
-      sampler_(line_box(mesh.bounds)),
-      sequence_(options.lines.sequence, options.lines.seed, 0),
-      seed_(options.lines.seed),
-      total_(static_cast<uint64_t>(options.lines.total)),
-      chunk_lines_(static_cast<uint64_t>(options.store.chunk_lines)),
-      chunks_((total_ + chunk_lines_ - 1) / chunk_lines_) {}
-
-uint64_t ChunkTracer::lines_in(uint64_t chunk) const {
-  return std::min(chunk_lines_, total_ - first_line(chunk));
+void BoxTally::merge_into(BoxTally& total) const {
+  auto sum = [](std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
+    for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+  };
+  sum(total.counts.patch_crossings, counts.patch_crossings);
+  sum(total.counts.wall_lines, counts.wall_lines);
+  sum(total.counts.wall_open, counts.wall_open);
+  sum(total.counts.child_crossings, counts.child_crossings);
+  for (const auto& [key, n] : first_met) total.first_met[key] += n;
 }
 
-void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, std::vector<uint32_t>& crossings) const {
-  Rng rng = make_rng(seed_, kStoreLineStream, chunk);
+ChunkTracer::ChunkTracer(const Options& options, const PatchMesh& mesh, const Hierarchy& hierarchy, int box,
+                         uint64_t lines)
+    : mesh_(mesh),
+      hierarchy_(hierarchy),
+      box_(hierarchy.boxes[box]),
+      box_index_(box),
+      tracer_(mesh, hierarchy.boxes[box].patches),
+      sampler_(line_box(hierarchy.boxes[box].bounds)),
+      sequence_(options.lines.sequence, options.lines.seed, static_cast<unsigned>(box)),
+      seed_(options.lines.seed),
+      total_(lines),
+      chunk_lines_(static_cast<uint64_t>(options.store.chunk_lines)),
+      chunks_((total_ + chunk_lines_ - 1) / chunk_lines_) {
+  uint32_t offset = 0;
+  for (int c : box_.children) {
+    child_offset_.push_back(offset);
+    offset += hierarchy.boxes[c].ar_count();
+  }
+  child_offset_.push_back(offset);
+}
+
+uint64_t ChunkTracer::lines_in(uint64_t chunk) const { return std::min(chunk_lines_, total_ - first_line(chunk)); }
+
+BoxTally ChunkTracer::empty_tally() const {
+  BoxTally t;
+  t.counts.resize(box_.patches.size(), box_.ar_count(), child_offset_.back());
+  return t;
+}
+
+uint32_t ChunkTracer::local_patch(int patch) const {
+  const auto it = std::lower_bound(box_.patches.begin(), box_.patches.end(), static_cast<uint32_t>(patch));
+  return static_cast<uint32_t>(it - box_.patches.begin());
+}
+
+void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const {
+  using linestore::Event;
+  Rng rng = make_rng(seed_, kStoreLineStream, (static_cast<unsigned long long>(box_index_) << 40) + chunk);
   const uint64_t first = first_line(chunk), n = lines_in(chunk);
+  const bool root = box_index_ == 0;
   out.resize(n);
   std::vector<LineHit> hits;
+  struct ChildCrossing {
+    double t_in, t_out;
+    Event event;
+  };
+  std::vector<ChildCrossing> children;
+  linestore::BoxCounts& counts = tally.counts;
   for (uint64_t i = 0; i < n; ++i) {
     double u[4];
     sequence_.point(first + i, rng, u);
     const GlobalLine line = sampler_.sample(u);
+    linestore::LineRecord& record = out[i];
+    record = {};
+    BoxCrossing wall{};
+    if (!root) {
+      // A subscene's line: its ends are where it crosses the box's walls.
+      if (!cross_box(box_.bounds, line.org, line.dir, wall)) continue;
+      record.entry_ar = box_.ar_at(wall.face_in, line.org + line.dir * wall.t_in, line.dir);
+      record.exit_ar = box_.ar_at(wall.face_out, line.org + line.dir * wall.t_out, line.dir);
+    }
     tracer_.all_hits(line.org, line.dir, line.length, hits);
     order_ties(mesh_, tracer_.tie_epsilon(), hits);
-    linestore::LineRecord& record = out[i];
-    record.events.clear();
+    children.clear();
+    for (size_t k = 0; k < box_.children.size(); ++k) {
+      const SceneBox& child = hierarchy_.boxes[box_.children[k]];
+      BoxCrossing c;
+      if (!cross_box(child.bounds, line.org, line.dir, c)) continue;
+      Event e;
+      e.kind = Event::child_box;
+      e.id = static_cast<uint32_t>(k);
+      e.entry_ar = child.ar_at(c.face_in, line.org + line.dir * c.t_in, line.dir);
+      e.exit_ar = child.ar_at(c.face_out, line.org + line.dir * c.t_out, line.dir);
+      children.push_back({c.t_in, c.t_out, e});
+      counts.child_crossings[child_offset_[k] + e.entry_ar]++;
+      counts.child_crossings[child_offset_[k] + e.exit_ar]++;
+    }
+    std::sort(children.begin(), children.end(), [](const auto& a, const auto& b) { return a.t_in < b.t_in; });
+    // No patch of this box is inside a child box (the hierarchy is built so),
+    // so a patch is before a child crossing or after it; one lying on the
+    // child's wall is outside the child.
+    size_t next_child = 0;
     for (const LineHit& h : hits) {
-      record.events.push_back({linestore::Event::patch, static_cast<uint32_t>(h.patch), h.along});
-      for (int face : mesh_.patch_faces[h.patch])
-        if (face >= 0) ++crossings[face];
+      while (next_child < children.size() && h.t > 0.5 * (children[next_child].t_in + children[next_child].t_out))
+        record.events.push_back(children[next_child++].event);
+      const uint32_t local = local_patch(h.patch);
+      record.events.push_back({Event::patch, local, h.along});
+      counts.patch_crossings[local]++;
+    }
+    while (next_child < children.size()) record.events.push_back(children[next_child++].event);
+    if (!root) {
+      counts.wall_lines[record.entry_ar]++;
+      counts.wall_lines[record.exit_ar]++;
+      if (record.events.empty()) {
+        counts.wall_open[record.entry_ar]++;
+        counts.wall_open[record.exit_ar]++;
+      } else {
+        // Associated patches: what a line entering at either end meets first.
+        const Event& a = record.events.front();
+        const Event& b = record.events.back();
+        if (a.kind == Event::patch) tally.first_met[linestore::associated_key(record.entry_ar, a.id)]++;
+        if (b.kind == Event::patch) tally.first_met[linestore::associated_key(record.exit_ar, b.id)]++;
+      }
     }
   }
   // Lines in order of their first and last crossings: neighbouring records

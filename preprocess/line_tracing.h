@@ -1,33 +1,55 @@
-// The global lines of a store, chunk by chunk: which lines a chunk holds is
-// fixed by the config alone (line index, per-chunk random stream), so a store
-// traced in shards, on any number of threads, holds the same lines.
+// The locally global lines of one box, chunk by chunk (design.md section 5):
+// which lines a chunk holds is fixed by the config alone (box, line index,
+// per-chunk random stream), so a store traced in shards, on any number of
+// threads, holds the same lines. A line is intersected with the box's own
+// patches (Embree), its child boxes (entry and exit ARs; their interior is
+// not visited) and its own walls (entry and exit ARs).
 #pragma once
 
+#include <cstdint>
+#include <unordered_map>
 #include <vector>
 
+#include "box_file.h"
 #include "config.h"
+#include "hierarchy.h"
 #include "line_record.h"
 #include "sampling.h"
 #include "tracer.h"
 
 namespace mpath {
 
+// What tracing a box's lines counts besides the records.
+struct BoxTally {
+  linestore::BoxCounts counts;
+  std::unordered_map<uint64_t, uint32_t> first_met;  // (wall AR, patch) -> lines entering there meeting it first
+  void merge_into(BoxTally& total) const;
+};
+
 class ChunkTracer {
  public:
-  ChunkTracer(const Options& options, const PatchMesh& mesh, const Tracer& tracer);
+  ChunkTracer(const Options& options, const PatchMesh& mesh, const Hierarchy& hierarchy, int box, uint64_t lines);
   uint64_t chunk_count() const { return chunks_; }
   uint64_t first_line(uint64_t chunk) const { return chunk * chunk_lines_; }
   uint64_t lines_in(uint64_t chunk) const;
-  // The records of chunk `chunk`; adds each face's crossings to `crossings`.
-  void trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, std::vector<uint32_t>& crossings) const;
+  // An empty tally of the right sizes for this box.
+  BoxTally empty_tally() const;
+  // The records of chunk `chunk`; adds what they count to `tally`.
+  void trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const;
 
  private:
+  uint32_t local_patch(int patch) const;
+
   const PatchMesh& mesh_;
-  const Tracer& tracer_;
+  const Hierarchy& hierarchy_;
+  const SceneBox& box_;
+  int box_index_;
+  Tracer tracer_;
   BoxLineSampler sampler_;
   LineSequence sequence_;
   unsigned long long seed_;
   uint64_t total_, chunk_lines_, chunks_;
+  std::vector<uint32_t> child_offset_;  // first AR of each child in the child-crossing counts
 };
 
 }  // namespace mpath

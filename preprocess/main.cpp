@@ -6,11 +6,14 @@ int main(int argc, char** argv) {
   CLI::App app{"mpath-preprocess: traces and stores the global lines of a scene"};
   mpath::ProgramFlags flags;
   std::string shard = "1/1";
+  bool print_hierarchy = false;
   mpath::add_common_flags(app, flags);
   app.add_option("--shard", shard, "trace part i of n (i/n) of the lines; run every part, in any order");
+  app.add_flag("--print-hierarchy", print_hierarchy, "print the hierarchy of subscenes (boxes, depth, objects, "
+               "polygons, quotient, lines per box) and stop");
   CLI11_PARSE(app, argc, argv);
   const char* advice = "finished shards are kept and verified; run again to finish the store";
   return mpath::run_program("mpath-preprocess", advice, flags, [&](const mpath::Options& options) {
-    mpath::run_preprocess(options, mpath::parse_shard(shard), flags.dry_run);
+    mpath::run_preprocess(options, mpath::parse_shard(shard), flags.dry_run, print_hierarchy);
   });
 }

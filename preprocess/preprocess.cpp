@@ -14,6 +14,7 @@
 #include "box_file.h"
 #include "error.h"
 #include "hash.h"
+#include "hierarchy.h"
 #include "line_tracing.h"
 #include "manifest.h"
 #include "mpath_version.h"
@@ -40,16 +41,17 @@ namespace {
 
 double seconds(clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
-std::string file_name(const ShardSpec& shard) {
-  if (shard.count == 1) return "box0000.lines";
-  return fmt::format("box0000.part{:04}of{:04}.lines", shard.index, shard.count);
+std::string file_name(int box, const ShardSpec& shard) {
+  if (shard.count == 1) return fmt::format("box{:04}.lines", box);
+  return fmt::format("box{:04}.part{:04}of{:04}.lines", box, shard.index, shard.count);
 }
 
 fs::path part_manifest(const fs::path& dir, const ShardSpec& shard) {
   return dir / fmt::format("part{:04}of{:04}.json", shard.index, shard.count);
 }
 
-linestore::Manifest base_manifest(const Options& options, const PatchMesh& mesh,
+linestore::Manifest base_manifest(const Options& options, const PatchMesh& mesh, const Hierarchy& hierarchy,
+                                  const std::vector<uint64_t>& budget,
                                   const std::map<std::string, std::string>& identity) {
   linestore::Manifest m;
   m.format_version = linestore::kFormatVersion;
@@ -57,8 +59,25 @@ linestore::Manifest base_manifest(const Options& options, const PatchMesh& mesh,
   m.identity = identity;
   m.patches = mesh.patches.size();
   m.faces = mesh.face_count();
-  m.lines_total = static_cast<uint64_t>(options.lines.total);
+  m.lines_total = 0;
+  for (uint64_t n : budget) m.lines_total += n;
   m.chunk_lines = static_cast<uint64_t>(options.store.chunk_lines);
+  for (size_t b = 0; b < hierarchy.boxes.size(); ++b) {
+    const SceneBox& box = hierarchy.boxes[b];
+    linestore::BoxEntry e;
+    e.parent = box.parent;
+    e.depth = box.depth;
+    for (int i = 0; i < 3; ++i) {
+      e.lo[i] = box.bounds.lo[i];
+      e.hi[i] = box.bounds.hi[i];
+    }
+    e.lines = budget[b];
+    e.patches = box.patches.size();
+    e.ars = box.ar_count();
+    e.objects = static_cast<uint64_t>(box.objects_total);
+    e.quotient = box.quotient;
+    m.boxes.push_back(e);
+  }
   return m;
 }
 
@@ -68,9 +87,12 @@ bool finished_and_verified(const fs::path& record, const fs::path& dir,
   if (!fs::exists(record)) return false;
   try {
     const linestore::Manifest m = linestore::read_manifest(record);
-    if (!linestore::identity_mismatch(identity, m.identity).empty() || m.files.size() != 1) return false;
-    const fs::path file = dir / m.files[0].name;
-    return fs::exists(file) && fs::file_size(file) == m.files[0].bytes && hash_file(file) == m.files[0].hash;
+    if (!linestore::identity_mismatch(identity, m.identity).empty() || m.files.empty()) return false;
+    for (const linestore::StoreFile& f : m.files) {
+      const fs::path file = dir / f.name;
+      if (!fs::exists(file) || fs::file_size(file) != f.bytes || hash_file(file) != f.hash) return false;
+    }
+    return true;
   } catch (const InputError&) {
     return false;
   }
@@ -91,47 +113,25 @@ bool merge_parts(const fs::path& dir, const ShardSpec& shard, linestore::Manifes
 
 }  // namespace
 
-PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, bool dry_run) {
-  const auto start = clock::now();
-  const int threads = effective_threads(options);
-  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  spdlog::info("mpath-preprocess {} ({}), shard {}/{}, {} thread(s)", MPATH_VERSION, MPATH_GIT_COMMIT, shard.index,
-               shard.count, threads);
-  PreparedScene prepared = prepare_scene(options);
-  const PatchMesh& mesh = prepared.mesh;
-  PreprocessStats stats;
-  if (dry_run) return stats;
+namespace {
 
-  const fs::path dir = options.store.dir;
-  fs::create_directories(dir);
-  const auto identity = store_identity(options, mesh);
-  const linestore::Manifest base = base_manifest(options, mesh, identity);
-  const fs::path record = shard.count == 1 ? dir / "manifest.json" : part_manifest(dir, shard);
-  if (finished_and_verified(record, dir, identity)) {
-    spdlog::info("{}: finished and verified earlier, not traced again", (dir / file_name(shard)).string());
-    stats.skipped = true;
-    if (shard.count > 1) stats.manifest_written = merge_parts(dir, shard, base);
-    return stats;
-  }
-  // The store is incomplete from now until this run's manifest is written.
-  std::error_code ec;
-  fs::remove(dir / "manifest.json", ec);
-  fs::remove(record, ec);
-
-  const Tracer tracer(mesh);
-  const ChunkTracer chunks(options, mesh, tracer);
+// Traces the shard's part of one box's lines into one file; adds to `stats`.
+linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, const Hierarchy& hierarchy, int box,
+                               uint64_t lines, const ShardSpec& shard, const fs::path& dir, int threads,
+                               PreprocessStats& stats) {
+  const ChunkTracer chunks(options, mesh, hierarchy, box, lines);
   const uint64_t lo = chunks.chunk_count() * (shard.index - 1) / shard.count;
   const uint64_t hi = chunks.chunk_count() * shard.index / shard.count;
   uint64_t shard_lines = 0;
   for (uint64_t c = lo; c < hi; ++c) shard_lines += chunks.lines_in(c);
 
-  const fs::path path = dir / file_name(shard);
-  linestore::BoxFileWriter writer(path, 0);
-  tbb::enumerable_thread_specific<std::vector<uint32_t>> crossings(std::vector<uint32_t>(mesh.face_count(), 0));
+  const fs::path path = dir / file_name(box, shard);
+  linestore::BoxFileWriter writer(path, static_cast<uint32_t>(box));
+  tbb::enumerable_thread_specific<BoxTally> tallies([&] { return chunks.empty_tally(); });
   std::atomic<uint64_t> trace_ns{0}, encode_ns{0}, compress_ns{0};
   auto ns = [](clock::duration d) { return static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(d).count()); };
   Progress progress(fmt::format("tracing {}", path.filename().string()), shard_lines, "lines", true);
-  uint64_t next = lo;
+  uint64_t next = lo, file_lines = 0, file_events = 0;
   double write_seconds = 0;
   tbb::parallel_pipeline(
       static_cast<size_t>(2 * threads),
@@ -148,7 +148,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
               [&](uint64_t c) {
                 std::vector<linestore::LineRecord> records;
                 auto t0 = clock::now();
-                chunks.trace(c, records, crossings.local());
+                chunks.trace(c, records, tallies.local());
                 auto t1 = clock::now();
                 uint64_t events = 0;
                 const std::string raw = linestore::encode_lines(records, events);
@@ -166,35 +166,88 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
                                                             auto t0 = clock::now();
                                                             writer.write(chunk);
                                                             write_seconds += seconds(clock::now() - t0);
-                                                            stats.lines += chunk.info.lines;
-                                                            stats.events += chunk.info.events;
+                                                            file_lines += chunk.info.lines;
+                                                            file_events += chunk.info.events;
                                                             stats.raw_bytes += chunk.info.raw_bytes;
                                                             progress.advance(chunk.info.lines);
                                                           }));
   progress.finish();
-  std::vector<uint32_t> total(mesh.face_count(), 0);
-  for (const auto& local : crossings)
-    for (size_t f = 0; f < total.size(); ++f) total[f] += local[f];
+  BoxTally total = chunks.empty_tally();
+  for (const BoxTally& t : tallies) t.merge_into(total);
+  std::vector<std::pair<uint64_t, uint32_t>> first_met(total.first_met.begin(), total.first_met.end());
+  std::sort(first_met.begin(), first_met.end());
+  linestore::select_associated(first_met, total.counts);
   auto t0 = clock::now();
-  writer.finish(total);
+  writer.finish(total.counts);
   write_seconds += seconds(clock::now() - t0);
+  const uint64_t bytes = fs::file_size(path);
+  stats.lines += file_lines;
+  stats.events += file_events;
+  stats.bytes += bytes;
+  stats.trace_seconds += trace_ns * 1e-9;
+  stats.encode_seconds += encode_ns * 1e-9;
+  stats.compress_seconds += compress_ns * 1e-9;
+  stats.write_seconds += write_seconds;
+  return {path.filename().string(), static_cast<uint32_t>(box), chunks.first_line(lo), file_lines, file_events,
+          hi - lo, bytes, hash_file(path)};
+}
+
+}  // namespace
+
+PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, bool dry_run, bool print_hierarchy) {
+  const auto start = clock::now();
+  const int threads = effective_threads(options);
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  spdlog::info("mpath-preprocess {} ({}), shard {}/{}, {} thread(s)", MPATH_VERSION, MPATH_GIT_COMMIT, shard.index,
+               shard.count, threads);
+  PreparedScene prepared = prepare_scene(options);
+  const PatchMesh& mesh = prepared.mesh;
+  PreprocessStats stats;
+  auto t = clock::now();
+  const Hierarchy hierarchy = store_hierarchy(options, mesh);
+  stats.hierarchy_seconds = seconds(clock::now() - t);
+  const std::vector<uint64_t> budget = box_line_budget(hierarchy, options.lines);
+  spdlog::info("hierarchy: {} box(es), depth {} ({:.2f} s)", hierarchy.boxes.size(), hierarchy.max_depth(),
+               stats.hierarchy_seconds);
+  if (print_hierarchy) {
+    fmt::print("{}", describe_hierarchy(hierarchy, budget));
+    return stats;
+  }
+  if (dry_run) return stats;
+
+  const fs::path dir = options.store.dir;
+  fs::create_directories(dir);
+  const auto identity = store_identity(options, mesh);
+  const linestore::Manifest base = base_manifest(options, mesh, hierarchy, budget, identity);
+  const fs::path record = shard.count == 1 ? dir / "manifest.json" : part_manifest(dir, shard);
+  if (finished_and_verified(record, dir, identity)) {
+    spdlog::info("{}: shard {}/{} finished and verified earlier, not traced again", dir.string(), shard.index, shard.count);
+    stats.skipped = true;
+    if (shard.count > 1) stats.manifest_written = merge_parts(dir, shard, base);
+    return stats;
+  }
+  // The store is incomplete from now until this run's manifest is written.
+  std::error_code ec;
+  fs::remove(dir / "manifest.json", ec);
+  fs::remove(record, ec);
 
   linestore::Manifest m = base;
-  m.files.push_back({path.filename().string(), 0, chunks.first_line(lo), stats.lines, stats.events, hi - lo,
-                     fs::file_size(path), hash_file(path)});
+  nlohmann::json per_box = nlohmann::json::array();
+  for (int b : hierarchy.depth_order) {
+    const auto t0 = clock::now();
+    m.files.push_back(trace_box(options, mesh, hierarchy, b, budget[b], shard, dir, threads, stats));
+    per_box.push_back({{"box", b}, {"lines", m.files.back().lines}, {"events", m.files.back().events},
+                       {"bytes", m.files.back().bytes}, {"seconds", seconds(clock::now() - t0)}});
+  }
   linestore::write_manifest(record, m);
   stats.manifest_written = shard.count == 1 || merge_parts(dir, shard, base);
-  stats.bytes = fs::file_size(path);
-  stats.trace_seconds = trace_ns * 1e-9;
-  stats.encode_seconds = encode_ns * 1e-9;
-  stats.compress_seconds = compress_ns * 1e-9;
-  stats.write_seconds = write_seconds;
   stats.wall_seconds = seconds(clock::now() - start);
   const nlohmann::json timings = {{"shard", fmt::format("{}/{}", shard.index, shard.count)}, {"lines", stats.lines},
                                  {"events", stats.events}, {"bytes", stats.bytes}, {"raw_bytes", stats.raw_bytes},
+                                 {"hierarchy_seconds", stats.hierarchy_seconds},
                                  {"trace_seconds", stats.trace_seconds}, {"encode_seconds", stats.encode_seconds},
                                  {"compress_seconds", stats.compress_seconds}, {"write_seconds", stats.write_seconds},
-                                 {"wall_seconds", stats.wall_seconds}, {"threads", threads}};
+                                 {"wall_seconds", stats.wall_seconds}, {"threads", threads}, {"boxes", per_box}};
   {
     const fs::path json_path = dir / (shard.count == 1 ? std::string("preprocess.json")
                                                       : fmt::format("preprocess.part{:04}of{:04}.json", shard.index, shard.count));
@@ -202,8 +255,9 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
     file.stream() << timings.dump(2) << "\n";
     file.commit();
   }
-  spdlog::info("{}: {} lines, {} events, {:.3f} bytes/event on disk ({:.2f} before compression), {:.1f} MB",
-               path.string(), stats.lines, stats.events, stats.events ? double(stats.bytes) / stats.events : 0.0,
+  spdlog::info("{}: {} box file(s), {} lines, {} events, {:.3f} bytes/event on disk ({:.2f} before compression), {:.1f} MB",
+               dir.string(), m.files.size(), stats.lines, stats.events,
+               stats.events ? double(stats.bytes) / stats.events : 0.0,
                stats.events ? double(stats.raw_bytes) / stats.events : 0.0, stats.bytes / 1e6);
   if (shard.count > 1 && !stats.manifest_written)
     spdlog::info("store not complete yet: manifest.json is written when every shard of {} has finished", shard.count);

@@ -12,7 +12,7 @@ namespace mpath {
 
 namespace {
 
-constexpr char kMagic[8] = {'M', 'P', 'C', 'K', 'P', 'T', '1', '\0'};
+constexpr char kMagic[8] = {'M', 'P', 'C', 'K', 'P', 'T', '2', '\0'};
 
 template <typename T>
 void put(std::ostream& out, const T& v) {
@@ -86,6 +86,8 @@ void write_checkpoint(const std::filesystem::path& path, const std::string& key,
   put<uint32_t>(out, static_cast<uint32_t>(state.channels));
   put_doubles(out, state.phi);
   put_doubles(out, state.unshot);
+  put_doubles(out, state.ar_in);
+  put_doubles(out, state.ar_out);
   for (const auto* a : {&state.energy.emitted, &state.energy.absorbed, &state.energy.escaped})
     for (double v : *a) put(out, v);
   put(out, log.first_unshot);
@@ -114,6 +116,8 @@ void read_checkpoint(const std::filesystem::path& path, const std::string& key, 
   if (in.get<uint32_t>() != static_cast<uint32_t>(state.channels)) in.fail("channel count differs");
   in.get_doubles(state.phi, state.phi.size());
   in.get_doubles(state.unshot, state.unshot.size());
+  in.get_doubles(state.ar_in, state.ar_in.size());
+  in.get_doubles(state.ar_out, state.ar_out.size());
   for (auto* a : {&state.energy.emitted, &state.energy.absorbed, &state.energy.escaped})
     for (double& v : *a) v = in.get<double>();
   log.first_unshot = in.get<double>();

@@ -33,12 +33,24 @@ double RadiosityState::unshot_total() const {
   return sum;
 }
 
+double RadiosityState::held_total() const {
+  double sum = 0;
+  for (double u : ar_in) sum += u;
+  for (double u : ar_out) sum += u;
+  return sum;
+}
+
+double RadiosityState::remaining_fraction() const {
+  const double e = emitted_total();
+  return e > 0 ? (unshot_total() + held_total()) / e : 0.0;
+}
+
 double RadiosityState::emitted_total() const {
   return energy.emitted[0] + energy.emitted[1] + energy.emitted[2];
 }
 
 double RadiosityState::energy_residual() const {
-  double r = unshot_total();
+  double r = unshot_total() + held_total();
   for (int c = 0; c < 3; ++c) r += energy.absorbed[c] + energy.escaped[c];
   return emitted_total() - r;
 }

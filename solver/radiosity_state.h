@@ -23,12 +23,19 @@ struct RadiosityState {
   std::vector<double> emitted_power; // face * channels, W
   std::vector<double> phi;           // face * channels, accumulated power W
   std::vector<double> unshot;        // face * channels, W
+  // Power held in the ARs of subscene walls (design.md section 7): entering
+  // a box (In) and leaving it (Out), AR * channels, W; empty without subscenes.
+  std::vector<double> ar_in, ar_out;
   EnergyTotals energy;
 
   size_t at(size_t face, int c) const { return face * channels + c; }
   double unshot_total() const;
+  // Power held in ARs, summed over channels.
+  double held_total() const;
+  // (unshot + held) / emitted: what the iterations have still to distribute.
+  double remaining_fraction() const;
   double emitted_total() const;
-  // emitted - absorbed - escaped - unshot, summed over channels.
+  // emitted - absorbed - escaped - unshot - held, summed over channels.
   double energy_residual() const;
   // Radiosity B = Phi / A of a face in RGB (grey scenes replicate the channel).
   std::array<double, 3> radiosity(const PatchMesh& mesh, size_t face) const;

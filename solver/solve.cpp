@@ -16,7 +16,8 @@
 #include "render.h"
 #include "sampling.h"
 #include "solution_ply.h"
-#include "stored_lines.h"
+#include "box_store.h"
+#include "hierarchical.h"
 
 namespace mpath {
 namespace {
@@ -26,22 +27,53 @@ using json = nlohmann::json;
 
 double seconds_since(clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); }
 
+// Bytes the solver holds per AR of a box: In and Out per channel, the
+// transmittance, two redirect targets, n_R, n_R^d and the associated patches.
+size_t ar_bytes(const RadiosityState& s) {
+  return 2 * s.channels * sizeof(double) + sizeof(double) + 4 * sizeof(uint32_t) +
+         2 * linestore::BoxCounts::kAssociated * sizeof(uint32_t);
+}
+
+json hierarchy_json(const BoxStore& store, const RadiosityState& state, const std::vector<BoxPassStats>& last) {
+  json boxes = json::array();
+  size_t ar_memory = 0;
+  for (size_t b = 0; b < store.box_count(); ++b) {
+    const SceneBox& sb = store.hierarchy().boxes[b];
+    const StoreBox& box = store.box(b);
+    const size_t memory = sb.ar_count() * ar_bytes(state) + box.counts.child_crossings.size() * sizeof(uint32_t);
+    ar_memory += memory;
+    boxes.push_back({{"box", b}, {"parent", sb.parent}, {"depth", sb.depth}, {"children", sb.children},
+                     {"objects", sb.objects_total}, {"polygons", sb.polygons_total}, {"patches_direct", sb.patches.size()},
+                     {"quotient", sb.quotient}, {"vp_grid", sb.grid}, {"ars", sb.ar_count()},
+                     {"lo", {sb.bounds.lo.x, sb.bounds.lo.y, sb.bounds.lo.z}},
+                     {"hi", {sb.bounds.hi.x, sb.bounds.hi.y, sb.bounds.hi.z}},
+                     {"lines", box.lines}, {"events", box.events}, {"store_bytes", box.bytes}, {"ar_memory_bytes", memory},
+                     {"last_pass_seconds", b < last.size() ? last[b].seconds : 0.0}});
+  }
+  return {{"boxes", boxes}, {"count", store.box_count()}, {"depth", store.hierarchy().max_depth()},
+          {"ars", store.ar_total()}, {"ar_memory_bytes", ar_memory}, {"store_bytes", store.bytes()}};
+}
+
 json energy_json(const RadiosityState& s) {
   const auto absorbed = s.rgb(s.energy.absorbed), escaped = s.rgb(s.energy.escaped), emitted = s.rgb(s.energy.emitted);
   std::array<double, 3> unshot{};
   for (size_t f = 0; f < s.faces; ++f)
     for (int c = 0; c < s.channels; ++c) unshot[c] += s.unshot[s.at(f, c)];
   const auto unshot_rgb = s.rgb(unshot);
+  std::array<double, 3> held{};
+  for (size_t i = 0; i < s.ar_in.size(); ++i) held[i % s.channels] += s.ar_in[i] + s.ar_out[i];
+  const auto held_rgb = s.rgb(held);
   auto sum = [](const std::array<double, 3>& v) { return v[0] + v[1] + v[2]; };
-  const double residual = sum(emitted) - sum(absorbed) - sum(escaped) - sum(unshot_rgb);
+  const double residual = sum(emitted) - sum(absorbed) - sum(escaped) - sum(unshot_rgb) - sum(held_rgb);
   return {{"emitted", sum(emitted)},
           {"absorbed", sum(absorbed)},
           {"escaped", sum(escaped)},
           {"unshot", sum(unshot_rgb)},
-          {"in_transit", 0.0},
+          {"in_transit", sum(held_rgb)},
           {"residual", residual},
           {"relative_residual", sum(emitted) > 0 ? residual / sum(emitted) : 0.0},
-          {"per_channel", {{"emitted", emitted}, {"absorbed", absorbed}, {"escaped", escaped}, {"unshot", unshot_rgb}}}};
+          {"per_channel", {{"emitted", emitted}, {"absorbed", absorbed}, {"escaped", escaped}, {"unshot", unshot_rgb},
+                            {"in_transit", held_rgb}}}};
 }
 
 void write_json(const std::filesystem::path& path, const json& j) {
@@ -54,10 +86,6 @@ void write_json(const std::filesystem::path& path, const json& j) {
 
 void run_solve(const Options& options, const SolveFlags& flags) {
   const auto start = clock::now();
-  if (options.solver.method == "hierarchical")
-    throw InputError("config key 'solver.method': 'hierarchical' needs the hierarchy of subscenes, which this version "
-                     "does not build yet; use solver.method=multipath (stored lines) or classic");
-
   const int threads = effective_threads(options);
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   spdlog::info("mpath-solve {} ({}), method {}, {} thread(s)", MPATH_VERSION, MPATH_GIT_COMMIT, options.solver.method, threads);
@@ -65,11 +93,11 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   PreparedScene prepared = prepare_scene(options);
   const PatchMesh& mesh = prepared.mesh;
   // A stored-line solve checks its store before any work.
-  std::unique_ptr<StoredLines> store;
-  if (options.solver.method == "multipath") {
-    store = std::make_unique<StoredLines>(options, mesh);
-    spdlog::info("store {}: {} lines, {} events, {:.1f} MB", options.store.dir.string(), store->lines(), store->events(),
-                 store->bytes() / 1e6);
+  std::unique_ptr<BoxStore> store;
+  if (options.solver.method != "classic") {
+    store = std::make_unique<BoxStore>(options, mesh);
+    spdlog::info("store {}: {} box(es), depth {}, {} lines, {} events, {:.1f} MB", options.store.dir.string(),
+                 store->box_count(), store->hierarchy().max_depth(), store->lines(), store->events(), store->bytes() / 1e6);
   }
   if (flags.dry_run) {
     spdlog::info("dry run: config, scene{} are valid; nothing solved", store ? " and store" : "");
@@ -82,6 +110,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   const double bvh_seconds = seconds_since(t);
 
   RadiosityState state = make_state(prepared.scene, mesh);
+  if (store) add_ar_state(*store, state);
   spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
   const std::string key = checkpoint_key(options, mesh, threads);
   const auto checkpoint = options.output.dir / "checkpoint.bin";
@@ -95,7 +124,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   } else {
     if (flags.resume) spdlog::warn("--resume: no checkpoint at {}; starting from the beginning", checkpoint.string());
     std::vector<double> crossings;
-    if (store) crossings = store->crossings();
+    if (store) crossings = store->face_crossings(mesh.face_count());
     else crossings = forecast_crossings(mesh, static_cast<double>(options.lines.total));
     shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, threads,
                       emitter_crossings(options, std::move(crossings)));
@@ -104,8 +133,10 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   t = clock::now();
   const uint64_t hits_before = iterations.hits;  // passes restored from a checkpoint are not timed here
   const auto save = [&] { write_checkpoint(checkpoint, key, state, iterations); };
+  std::vector<BoxPassStats> box_stats;
   if (store) {
-    iterate(options, state, iterations, [&](unsigned pass) { return stored_pass(mesh, *store, state, pass, threads); }, save);
+    iterate(options, state, iterations,
+            [&](unsigned pass) { return hierarchical_iteration(*store, state, pass, threads, &box_stats); }, save);
   } else {
     iterate(options, state, iterations, [&](unsigned pass) {
       return classic_pass(mesh, tracer, state, classic_pass_lines(options, mesh, iterations, state), options.lines.seed,
@@ -114,11 +145,11 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   }
   const double iteration_seconds = seconds_since(t);
   const double relative_residual = state.energy_residual() / state.emitted_total();
-  spdlog::info("energy: unshot {:.3e} of emitted, balance residual {:.2e} (relative)",
-               state.unshot_total() / state.emitted_total(), relative_residual);
+  spdlog::info("energy: unshot {:.3e} and held in ARs {:.3e} of emitted, balance residual {:.2e} (relative)",
+               state.unshot_total() / state.emitted_total(), state.held_total() / state.emitted_total(), relative_residual);
   if (!iterations.converged)
-    spdlog::warn("stopped at solver.iterations = {} with unshot {:.3e} of emitted above solver.tolerance {}",
-                 options.solver.iterations, state.unshot_total() / state.emitted_total(), options.solver.tolerance);
+    spdlog::warn("stopped at solver.iterations = {} with unshot + held {:.3e} of emitted above solver.tolerance {}",
+                 options.solver.iterations, state.remaining_fraction(), options.solver.tolerance);
 
   t = clock::now();
   json outputs = json::array();
@@ -167,13 +198,15 @@ void run_solve(const Options& options, const SolveFlags& flags) {
       {"lines", {{"global", iterations.lines}, {"hits", iterations.hits}, {"local", shot.lines}}},
       {"iterations", {{"count", iterations.passes.size()}, {"converged", iterations.converged},
                       {"tolerance", options.solver.tolerance}, {"cap", options.solver.iterations},
-                      {"unshot_fraction", state.unshot_total() / state.emitted_total()}, {"passes", passes}}},
+                      {"unshot_fraction", state.unshot_total() / state.emitted_total()},
+                      {"remaining_fraction", state.remaining_fraction()}, {"passes", passes}}},
       {"memory", {{"peak_rss_bytes", peak_rss_bytes()}}},
       {"store", store ? json{{"dir", options.store.dir.string()}, {"lines", store->lines()}, {"events", store->events()},
                              {"bytes", store->bytes()}, {"bytes_per_event", double(store->bytes()) / std::max<uint64_t>(1, store->events())},
                              {"events_per_second_per_thread", iteration_seconds > 0 && !iterations.passes.empty()
                                   ? double(iterations.hits - hits_before) / iteration_seconds / threads : 0.0}}
                       : json(nullptr)},
+      {"hierarchy", store ? hierarchy_json(*store, state, box_stats) : json(nullptr)},
       {"energy", energy_json(state)},
       {"outputs", outputs},
       {"warnings", prepared.warnings},

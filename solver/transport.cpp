@@ -138,7 +138,7 @@ PassStats finish_pass(const PassInputs& in, const std::vector<ShardAccumulator>&
     stats.hits += a.hits;
   }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  stats.unshot_fraction = state.unshot_total() / state.emitted_total();
+  stats.unshot_fraction = state.remaining_fraction();
   return stats;
 }
 

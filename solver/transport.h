@@ -73,7 +73,7 @@ struct PassStats {
   uint64_t lines = 0;
   uint64_t hits = 0;
   double seconds = 0;
-  double unshot_fraction = 0;  // unshot / emitted after the pass
+  double unshot_fraction = 0;  // (unshot + held in ARs) / emitted after the pass
 };
 
 // merge_pass, then the pass's statistics (`start`: when the pass began).

@@ -166,12 +166,18 @@ const std::map<std::string, Setter>& setters() {
       {"hierarchy.vp_grid",
        [](auto& n, auto& s, Options& o) {
          const long long g = get_integer(n, s);
-         if (g < 0 || g > 1024 || (g & (g - 1)) != 0) bad_value(s, "expected 0 (automatic) or a power of two up to 1024");
+         if (g < 0 || g > 64 || (g & (g - 1)) != 0) bad_value(s, "expected 0 (automatic) or a power of two up to 64");
          o.hierarchy.vp_grid = static_cast<int>(g);
        }},
       {"hierarchy.max_depth", [](auto& n, auto& s, Options& o) { o.hierarchy.max_depth = static_cast<int>(in_range(get_integer(n, s), 0, 64, s)); }},
       {"lines.total", [](auto& n, auto& s, Options& o) { o.lines.total = positive(get_integer(n, s), s); }},
       {"lines.root_fraction", [](auto& n, auto& s, Options& o) { o.lines.root_fraction = in_range(get_number(n, s), 0.0, 1.0, s); }},
+      {"lines.box_budget",
+       [](auto& n, auto& s, Options& o) {
+         o.lines.box_budget = get_string(n, s);
+         if (o.lines.box_budget != "quotient" && o.lines.box_budget != "objects")
+           bad_value(s, fmt::format("unknown budget '{}' (known: quotient, objects)", o.lines.box_budget));
+       }},
       {"lines.seed",
        [](auto& n, auto& s, Options& o) {
          const long long v = get_integer(n, s);
@@ -304,6 +310,7 @@ toml::table options_table(const Options& o) {
                                 {"max_depth", o.hierarchy.max_depth}}},
       {"lines", toml::table{{"total", static_cast<int64_t>(o.lines.total)},
                             {"root_fraction", o.lines.root_fraction},
+                            {"box_budget", o.lines.box_budget},
                             {"seed", static_cast<int64_t>(o.lines.seed)},
                             {"sequence", o.lines.sequence}}},
       {"first_shot", toml::table{{"lines", static_cast<int64_t>(o.first_shot.lines)},

@@ -51,6 +51,9 @@ struct Options {
   struct Lines {
     long long total = 1'000'000;
     double root_fraction = 2.0 / 3.0;
+    // How the subscenes share the rest: "quotient" (their grouping quotient)
+    // or "objects" (their object count), paper 3.3.1.
+    std::string box_budget = "quotient";
     unsigned long long seed = 1;
     std::string sequence = "halton";  // "random" or "halton" (docs/algorithm.md)
   } lines;

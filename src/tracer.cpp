@@ -43,7 +43,8 @@ void sort_by_distance(LineHit* hits, size_t n) {
 struct LeaveContext {
   RTCIntersectContext context;
   const PatchMesh* mesh;
-  int from;
+  const Tracer* tracer;
+  int from;  // traced patch
   double contact;  // distances below this are contacts with the start plane
 };
 
@@ -56,7 +57,9 @@ void leave_filter(const RTCFilterFunctionNArguments* args) {
     return;
   }
   const auto& patches = ctx->mesh->patches;
-  if (t <= ctx->contact && dot(patches[prim].normal, patches[ctx->from].normal) > 0) args->valid[0] = 0;
+  const int a = ctx->tracer->global(prim);
+  const int b = ctx->tracer->global(ctx->from);
+  if (t <= ctx->contact && dot(patches[a].normal, patches[b].normal) > 0) args->valid[0] = 0;
 }
 
 void embree_error(void*, RTCError code, const char* message) {
@@ -82,9 +85,18 @@ void init_ray(RTCRayHit& rh, const Vec3& org, const Vec3& dir, double tnear, dou
 
 }  // namespace
 
-Tracer::Tracer(const PatchMesh& mesh) : mesh_(mesh) {
-  planes_.reserve(mesh.patches.size());
-  for (const Patch& p : mesh.patches) planes_.push_back({p.normal, dot(p.normal, mesh.vertices[p.v[0]])});
+Tracer::Tracer(const PatchMesh& mesh) : Tracer(mesh, {}, true) {}
+
+Tracer::Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset) : Tracer(mesh, subset, false) {}
+
+Tracer::Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset, bool all)
+    : mesh_(mesh), all_(all), subset_(subset) {
+  const size_t traced = all_ ? mesh.patches.size() : subset_.size();
+  planes_.reserve(traced);
+  for (size_t i = 0; i < traced; ++i) {
+    const Patch& p = mesh.patches[global(static_cast<int>(i))];
+    planes_.push_back({p.normal, dot(p.normal, mesh.vertices[p.v[0]])});
+  }
   device_ = rtcNewDevice("verbose=0");
   MPATH_CHECK(device_ != nullptr, "rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
   rtcSetDeviceErrorFunction(device_, embree_error, nullptr);
@@ -92,23 +104,28 @@ Tracer::Tracer(const PatchMesh& mesh) : mesh_(mesh) {
   rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
 
+  if (traced > 0) add_quads(traced);
+  rtcCommitScene(scene_);
+  MPATH_CHECK(rtcGetDeviceError(device_) == RTC_ERROR_NONE, "embree scene build failed");
+  tie_epsilon_ = 1e-7 * std::max(mesh.bounds.diagonal(), 1e-30);
+  near_tie_ = 1e-4 * std::max(mesh.bounds.diagonal(), 1e-30);
+  hair_ = 1e-6 * std::max(mesh.bounds.diagonal(), 1e-30);
+}
+
+void Tracer::add_quads(size_t traced) {
+  const PatchMesh& mesh = mesh_;
   RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_QUAD);
   auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                          3 * sizeof(float), mesh.vertices.size()));
   for (size_t i = 0; i < mesh.vertices.size(); ++i)
     for (int k = 0; k < 3; ++k) vb[3 * i + k] = static_cast<float>(mesh.vertices[i][k]);
   auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
-                                                            4 * sizeof(unsigned), mesh.patches.size()));
-  for (size_t i = 0; i < mesh.patches.size(); ++i)
-    for (int k = 0; k < 4; ++k) ib[4 * i + k] = mesh.patches[i].v[k];
+                                                            4 * sizeof(unsigned), traced));
+  for (size_t i = 0; i < traced; ++i)
+    for (int k = 0; k < 4; ++k) ib[4 * i + k] = mesh.patches[global(static_cast<int>(i))].v[k];
   rtcCommitGeometry(geom);
   rtcAttachGeometry(scene_, geom);
   rtcReleaseGeometry(geom);
-  rtcCommitScene(scene_);
-  MPATH_CHECK(rtcGetDeviceError(device_) == RTC_ERROR_NONE, "embree scene build failed");
-  tie_epsilon_ = 1e-7 * std::max(mesh.bounds.diagonal(), 1e-30);
-  near_tie_ = 1e-4 * std::max(mesh.bounds.diagonal(), 1e-30);
-  hair_ = 1e-6 * std::max(mesh.bounds.diagonal(), 1e-30);
 }
 
 Tracer::~Tracer() {
@@ -127,16 +144,22 @@ NearestHit Tracer::nearest(const Vec3& org, const Vec3& dir, double tnear, doubl
   init_ray(rh, org, dir, tnear, tfar);
   rtcIntersect1(scene_, &context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
-  const int patch = static_cast<int>(rh.hit.primID);
-  return {patch, plane_distance(patch, org, dir, rh.ray.tfar)};
+  const int local = static_cast<int>(rh.hit.primID);
+  return {global(local), plane_distance(local, org, dir, rh.ray.tfar)};
 }
 
 NearestHit Tracer::nearest_from(int from, const Vec3& org, const Vec3& dir, double tfar) const {
+  if (!all_) {  // `from` in traced numbering
+    const auto it = std::lower_bound(subset_.begin(), subset_.end(), static_cast<uint32_t>(from));
+    MPATH_CHECK(it != subset_.end() && *it == static_cast<uint32_t>(from), "nearest_from: patch {} is not traced", from);
+    from = static_cast<int>(it - subset_.begin());
+  }
   // Start a hair behind the patch so that a surface touching it is met.
   LeaveContext ctx;
   rtcInitIntersectContext(&ctx.context);
   ctx.context.filter = leave_filter;
   ctx.mesh = &mesh_;
+  ctx.tracer = this;
   ctx.from = from;
   ctx.contact = 2.0 * hair_;
   const Vec3 start = org - dir * hair_;
@@ -144,12 +167,12 @@ NearestHit Tracer::nearest_from(int from, const Vec3& org, const Vec3& dir, doub
   init_ray(rh, start, dir, 0.0, tfar);
   rtcIntersect1(scene_, &ctx.context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
-  const int patch = static_cast<int>(rh.hit.primID);
-  return {patch, std::max(0.0, plane_distance(patch, start, dir, rh.ray.tfar) - hair_)};
+  const int local = static_cast<int>(rh.hit.primID);
+  return {global(local), std::max(0.0, plane_distance(local, start, dir, rh.ray.tfar) - hair_)};
 }
 
-double Tracer::plane_distance(int patch, const Vec3& org, const Vec3& dir, double fallback) const {
-  const Plane& p = planes_[patch];
+double Tracer::plane_distance(int local, const Vec3& org, const Vec3& dir, double fallback) const {
+  const Plane& p = planes_[local];
   const double denom = dot(p.n, dir);
   if (std::fabs(denom) < 1e-12) return fallback;
   return (p.d - dot(p.n, org)) / denom;
@@ -191,6 +214,8 @@ void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector
     if (!duplicate) out[kept++] = out[i];
   }
   out.resize(kept);
+  if (!all_)
+    for (LineHit& h : out) h.patch = global(h.patch);
 }
 
 }  // namespace mpath

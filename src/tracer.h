@@ -26,6 +26,9 @@ struct NearestHit {
 class Tracer {
  public:
   explicit Tracer(const PatchMesh& mesh);
+  // Over the patches `subset` of `mesh` only (a box's own patches); hits
+  // still name patches by their index in the mesh.
+  Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset);
   ~Tracer();
   Tracer(const Tracer&) = delete;
   Tracer& operator=(const Tracer&) = delete;
@@ -42,8 +45,6 @@ class Tracer {
   // `scratch` is reused between calls to avoid allocation.
   void all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector<LineHit>& out) const;
 
-  // Distance along the ray to the plane of `patch`, in double precision.
-  double plane_distance(int patch, const Vec3& org, const Vec3& dir, double fallback) const;
 
   static std::string embree_version();
   // Crossings closer than this along a line are at one distance (surfaces in contact).
@@ -51,14 +52,23 @@ class Tracer {
 
   // The Embree scene, for benchmarks that measure Embree alone.
   RTCScene embree_scene() const { return scene_; }
+  // Mesh patch of traced patch `local`.
+  int global(int local) const { return all_ ? local : static_cast<int>(subset_[local]); }
 
  private:
   struct Plane {
     Vec3 n;
     double d;  // n . x = d on the plane
   };
+  Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset, bool all);
+  void add_quads(size_t traced);
+  // Distance along the ray to the plane of traced patch `local`, in double precision.
+  double plane_distance(int local, const Vec3& org, const Vec3& dir, double fallback) const;
+
   const PatchMesh& mesh_;
-  std::vector<Plane> planes_;
+  bool all_ = true;               // every patch of the mesh is traced
+  std::vector<uint32_t> subset_;  // otherwise: traced patch -> mesh patch
+  std::vector<Plane> planes_;     // per traced patch
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   double tie_epsilon_ = 0;

@@ -100,7 +100,7 @@ TEST(Cli, BadInputGivesAClearErrorAndNoResult) {
   expect_failure("s.obj", kTriangle, "lines.total = \"many\"\n", "",
                  "config key 'lines.total': expected an integer, got a string");
   expect_failure("s.obj", kTriangle, "", "lines.total=-5", "command line: config key 'lines.total': expected a positive integer");
-  expect_failure("s.obj", kTriangle, "", "solver.method=hierarchical", "solver.method");
+  expect_failure("s.obj", kTriangle, "", "solver.method=fancy", "solver.method");
   expect_failure("s.mgf", "v a =\np 0 0 0\nsph a 1 2\n", "", "", "s.mgf:3: malformed 'sph'");
   expect_failure("s.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n", "", "",
                  "unexpected end of file in element 'vertex'");

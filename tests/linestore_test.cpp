@@ -51,7 +51,19 @@ std::vector<LineRecord> records(const DecodedChunk& c) {
 }
 
 // Writes a file of `chunks` chunks of 1000 random lines; returns the lines.
-std::vector<std::vector<LineRecord>> write_box(const std::filesystem::path& path, int chunks, std::vector<uint32_t> counts) {
+BoxCounts some_counts(std::vector<uint32_t> patch_crossings) {
+  BoxCounts c;
+  c.resize(patch_crossings.size(), 3, 2);
+  c.patch_crossings = std::move(patch_crossings);
+  c.wall_lines = {5, 0, 9};
+  c.wall_open = {1, 0, 9};
+  c.child_crossings = {3, 4};
+  c.associated[0] = 2;  // AR 0: patch 1, met first 4 times
+  c.associated[1] = 4;
+  return c;
+}
+
+std::vector<std::vector<LineRecord>> write_box(const std::filesystem::path& path, int chunks, std::vector<uint32_t> patch_crossings) {
   std::mt19937 rng(42);
   BoxFileWriter writer(path, 3);
   std::vector<std::vector<LineRecord>> all;
@@ -59,7 +71,7 @@ std::vector<std::vector<LineRecord>> write_box(const std::filesystem::path& path
     all.push_back(random_lines(1000, rng));
     writer.write(encode_chunk(all.back(), 1000ull * c, 3));
   }
-  writer.finish(counts);
+  writer.finish(some_counts(std::move(patch_crossings)));
   return all;
 }
 
@@ -70,7 +82,7 @@ TEST(LineStore, RoundTripsRandomLineRecords) {
   BoxFileReader reader(dir / "box.lines");
   EXPECT_EQ(reader.box(), 3u);
   EXPECT_EQ(reader.lines(), 4000u);
-  EXPECT_EQ(reader.face_crossings(), counts);
+  EXPECT_EQ(reader.counts(), some_counts(counts));
   ASSERT_EQ(reader.chunks().size(), 4u);
   DecodedChunk chunk;
   for (size_t c = 0; c < 4; ++c) {
@@ -131,7 +143,7 @@ TEST(LineStore, NamesTruncatedForeignAndOtherVersionFiles) {
 
   std::filesystem::copy_file(dir / "box.lines", dir / "v9.lines");
   patch_file(dir / "v9.lines", 8, std::string("\x09\0\0\0", 4));
-  EXPECT_NE(open_error(dir / "v9.lines").find("store format version 9 (this mpath reads version 1"), std::string::npos);
+  EXPECT_NE(open_error(dir / "v9.lines").find("store format version 9 (this mpath reads version 2"), std::string::npos);
   EXPECT_NE(open_error(dir / "missing.lines").find("missing.lines: missing"), std::string::npos);
 }
 
@@ -154,17 +166,49 @@ TEST(LineStore, RefusesAHostileIndexWithImplausibleSizes) {
   EXPECT_NE(open_error(dir / "box.lines").find("chunk 0: implausible sizes"), std::string::npos) << open_error(dir / "box.lines");
 }
 
+TEST(BoxCounts, AddingShardsSumsCountsAndMergesAssociatedPatches) {
+  BoxCounts a = some_counts({1, 2});
+  BoxCounts b = some_counts({10, 20});
+  // b: AR 0 meets patch 7 first 9 times, patch 1 once more.
+  b.associated[0] = 8;
+  b.associated[1] = 9;
+  b.associated[2] = 2;
+  b.associated[3] = 1;
+  a.add(b);
+  EXPECT_EQ(a.patch_crossings, (std::vector<uint32_t>{11, 22}));
+  EXPECT_EQ(a.wall_lines, (std::vector<uint32_t>{10, 0, 18}));
+  EXPECT_EQ(a.child_crossings, (std::vector<uint32_t>{6, 8}));
+  // Patch 7 (9 times) before patch 1 (4 + 1 times).
+  EXPECT_EQ(std::vector<uint32_t>(a.associated.begin(), a.associated.begin() + 6), (std::vector<uint32_t>{8, 9, 2, 5, 0, 0}));
+  BoxCounts wrong;
+  wrong.resize(3, 3, 2);
+  EXPECT_THROW(a.add(wrong), InputError);
+}
+
 TEST(Manifest, RoundTripsAndNamesTheFirstMismatch) {
   TempDir dir;
   Manifest m;
   m.format_version = kFormatVersion;
   m.identity = {{"lines.total", "1000"}, {"mesh.hash", "abc"}};
   m.files.push_back({"box0000.lines", 0, 0, 1000, 2500, 1, 12345, "0123456789abcdef"});
+  BoxEntry box;
+  box.parent = 0;
+  box.depth = 1;
+  box.lo[1] = -0.1;
+  box.hi[2] = 1.0 / 3.0;
+  box.lines = 77;
+  box.quotient = 1.25;
+  m.boxes = {BoxEntry{}, box};
   write_manifest(dir / "manifest.json", m);
   const Manifest back = read_manifest(dir / "manifest.json");
   EXPECT_EQ(back.identity, m.identity);
   ASSERT_EQ(back.files.size(), 1u);
   EXPECT_EQ(back.files[0].hash, "0123456789abcdef");
+  ASSERT_EQ(back.boxes.size(), 2u);
+  EXPECT_EQ(back.boxes[1].hi[2], 1.0 / 3.0);  // exactly: the solver compares boxes bit for bit
+  EXPECT_EQ(back.boxes[1].lo[1], -0.1);
+  EXPECT_EQ(back.boxes[1].lines, 77u);
+  EXPECT_EQ(back.boxes[0].parent, -1);
   EXPECT_EQ(identity_mismatch(m.identity, back.identity), "");
   auto other = m.identity;
   other["lines.total"] = "2000";

@@ -7,7 +7,8 @@
 
 #include "line_tracing.h"
 #include "scene_readers.h"
-#include "stored_lines.h"
+#include "box_store.h"
+#include "hierarchical.h"
 #include "test_util.h"
 #include "transport.h"
 
@@ -25,7 +26,9 @@ std::string bin(const char* name) {
 }
 // Quiet unless the arguments ask for a log level.
 std::string quiet(const std::string& args) { return args.find("--log-level") == std::string::npos ? " -q " + args : " " + args; }
-RunResult preprocess(const std::string& args) { return test::run(bin("mpath-preprocess") + " " + kCornell + kSmall + quiet(args)); }
+RunResult preprocess(const std::string& args) {
+  return test::run(bin("mpath-preprocess") + " " + kCornell + kSmall + " solver.method=multipath" + quiet(args));
+}
 RunResult solve(const std::string& args) {
   return test::run(test::solve_bin() + " " + kCornell + kSmall + " solver.method=multipath output.png=false" + quiet(args));
 }
@@ -44,28 +47,35 @@ TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
   const Scene scene = load_scene(o, warnings);
   const PatchMesh mesh = build_mesh(scene, o.mesh.max_patch_area);
   const Tracer tracer(mesh);
-  const StoredLines store(o, mesh);
+  const BoxStore store(o, mesh);
+  ASSERT_EQ(store.box_count(), 1u);
 
   // In memory: the same chunks traced again, the same shards, the same passes.
-  const ChunkTracer chunks(o, mesh, tracer);
+  const Hierarchy flat = build_hierarchy(mesh, o.hierarchy, true);
+  const ChunkTracer chunks(o, mesh, flat, 0, static_cast<uint64_t>(o.lines.total));
   std::vector<std::vector<linestore::LineRecord>> records(chunks.chunk_count());
-  std::vector<uint32_t> counted(mesh.face_count(), 0);
-  for (uint64_t c = 0; c < chunks.chunk_count(); ++c) chunks.trace(c, records[c], counted);
-  const std::vector<double> crossings(counted.begin(), counted.end());  // counted here, independently of the store
-  EXPECT_EQ(crossings, store.crossings());
+  BoxTally tally = chunks.empty_tally();
+  for (uint64_t c = 0; c < chunks.chunk_count(); ++c) chunks.trace(c, records[c], tally);
+  // Counted here, independently of the store; patch k of the root is patch k of the mesh.
+  std::vector<double> crossings(mesh.face_count(), 0.0);
+  for (size_t p = 0; p < mesh.patches.size(); ++p)
+    for (int face : mesh.patch_faces[p])
+      if (face >= 0) crossings[face] = tally.counts.patch_crossings[p];
+  EXPECT_EQ(crossings, store.face_crossings(mesh.face_count()));
 
   RadiosityState from_store = make_state(scene, mesh), in_memory = make_state(scene, mesh);
   first_shot(mesh, tracer, from_store, o.first_shot.lines, o.lines.seed, 2);
   first_shot(mesh, tracer, in_memory, o.first_shot.lines, o.lines.seed, 2);
   for (unsigned pass = 1; pass <= 3; ++pass) {
-    stored_pass(mesh, store, from_store, pass, 2);
+    hierarchical_iteration(store, from_store, pass, 2);
     const PassInputs in = PassInputs::start(in_memory, mesh, crossings);
     std::vector<ShardAccumulator> acc(2);
     for (int s = 0; s < 2; ++s) {
       acc[s].reset(mesh.face_count());
       std::vector<LineHit> hits;
       for (uint64_t c = records.size() * s / 2; c < records.size() * (s + 1) / 2; ++c)
-        for (const auto& line : records[c]) {
+        for (size_t i = 0, n = records[c].size(), l = 0; i < n; ++i, l = (l + line_stride(n)) % n) {
+          const auto& line = records[c][l];
           hits.clear();
           for (const auto& e : line.events) hits.push_back({0.0, static_cast<int>(e.id), e.along});
           transport_line(in, hits, acc[s]);

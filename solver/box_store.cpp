@@ -1,0 +1,250 @@
+#include "box_store.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "error.h"
+#include "store_identity.h"
+
+namespace mpath {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// ARs of the same sector and band in the VPs at Chebyshev distance r of (column, row).
+template <typename Visit>
+void ring(const SceneBox& box, const SceneBox::ArPlace& p, int r, Visit visit) {
+  const int n = box.grid[p.face];
+  for (int row = p.row - r; row <= p.row + r; ++row)
+    for (int column = p.column - r; column <= p.column + r; ++column) {
+      if (row < 0 || column < 0 || row >= n || column >= n) continue;
+      if (std::max(std::abs(row - p.row), std::abs(column - p.column)) != r) continue;
+      SceneBox::ArPlace q = p;
+      q.row = row;
+      q.column = column;
+      visit(box.ar_of(q), (row - p.row) * (row - p.row) + (column - p.column) * (column - p.column));
+    }
+}
+
+}  // namespace
+
+std::vector<double> transmittances(const SceneBox& box, const std::vector<uint32_t>& lines,
+                                   const std::vector<uint32_t>& open) {
+  const uint32_t ars = box.ar_count();
+  std::vector<double> t(ars, -1.0);
+  double sum = 0;
+  int known = 0;
+  for (uint32_t r = 0; r < ars; ++r)
+    if (lines[r] > 0) {
+      t[r] = double(open[r]) / lines[r];
+      sum += t[r];
+      ++known;
+    }
+  const double box_mean = known > 0 ? sum / known : 1.0;
+  for (uint32_t r = 0; r < ars; ++r) {
+    if (lines[r] > 0) continue;
+    const SceneBox::ArPlace p = box.place(r);
+    // The other directions over the same VP...
+    double s = 0;
+    int n = 0;
+    for (int sector = 0; sector < kSectors; ++sector)
+      for (int band = 0; band < kBands; ++band) {
+        SceneBox::ArPlace q = p;
+        q.sector = sector;
+        q.band = band;
+        const uint32_t a = box.ar_of(q);
+        // Neighbouring directions only: adjacent sector (cyclic) and band.
+        const int ds = std::min((sector - p.sector + kSectors) % kSectors, (p.sector - sector + kSectors) % kSectors);
+        if (lines[a] > 0 && ds <= 1 && std::abs(band - p.band) <= 1) {
+          s += double(open[a]) / lines[a];
+          ++n;
+        }
+      }
+    // ...else the same direction over the nearest VPs that have lines...
+    for (int radius = 1; n == 0 && radius < box.grid[p.face]; ++radius)
+      ring(box, p, radius, [&](uint32_t a, int) {
+        if (lines[a] > 0) {
+          s += double(open[a]) / lines[a];
+          ++n;
+        }
+      });
+    // ...else the box's mean.
+    t[r] = n > 0 ? s / n : box_mean;
+  }
+  return t;
+}
+
+std::vector<uint32_t> redirect_targets(const SceneBox& box, const std::vector<bool>& valid) {
+  const uint32_t ars = box.ar_count();
+  std::vector<uint32_t> target(ars, kNoTarget);
+  uint32_t any = kNoTarget;
+  std::array<uint32_t, 6> face_any;
+  face_any.fill(kNoTarget);
+  for (uint32_t r = 0; r < ars; ++r)
+    if (valid[r]) {
+      if (any == kNoTarget) any = r;
+      const int f = box.place(r).face;
+      if (face_any[f] == kNoTarget) face_any[f] = r;
+    }
+  for (uint32_t r = 0; r < ars; ++r) {
+    if (valid[r]) {
+      target[r] = r;
+      continue;
+    }
+    const SceneBox::ArPlace p = box.place(r);
+    uint32_t best = kNoTarget;
+    int best_d = 0;
+    for (int radius = 1; best == kNoTarget && radius < box.grid[p.face]; ++radius)
+      ring(box, p, radius, [&](uint32_t a, int d) {
+        if (valid[a] && (best == kNoTarget || d < best_d || (d == best_d && a < best))) {
+          best = a;
+          best_d = d;
+        }
+      });
+    if (best == kNoTarget) best = face_any[p.face];
+    if (best == kNoTarget) best = any;
+    target[r] = best;
+  }
+  return target;
+}
+
+BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
+  const fs::path dir = options.store.dir;
+  const fs::path manifest_path = dir / "manifest.json";
+  manifest_ = linestore::read_manifest(manifest_path);
+  const std::string mismatch = linestore::identity_mismatch(store_identity(options, mesh), manifest_.identity);
+  if (!mismatch.empty())
+    throw InputError(fmt::format("{}: the store does not match this scene and config: {}; run mpath-preprocess again",
+                                 manifest_path.string(), mismatch));
+  hierarchy_ = store_hierarchy(options, mesh);
+  const auto& recorded = manifest_.boxes;
+  auto differs = [&](size_t b) {
+    const SceneBox& box = hierarchy_.boxes[b];
+    const linestore::BoxEntry& e = recorded[b];
+    for (int i = 0; i < 3; ++i)
+      if (e.lo[i] != box.bounds.lo[i] || e.hi[i] != box.bounds.hi[i]) return true;
+    return e.parent != box.parent || e.patches != box.patches.size() || e.ars != box.ar_count();
+  };
+  if (recorded.size() != hierarchy_.boxes.size())
+    throw InputError(fmt::format("{}: the store has {} box(es), this scene and config build {}; run mpath-preprocess again",
+                                 manifest_path.string(), recorded.size(), hierarchy_.boxes.size()));
+  for (size_t b = 0; b < recorded.size(); ++b)
+    if (differs(b))
+      throw InputError(fmt::format("{}: box {} of the store differs from the one this scene and config build; run "
+                                   "mpath-preprocess again", manifest_path.string(), b));
+
+  boxes_.resize(hierarchy_.boxes.size());
+  for (size_t b = 0; b < boxes_.size(); ++b) {
+    const SceneBox& sb = hierarchy_.boxes[b];
+    StoreBox& box = boxes_[b];
+    box.ar_base = ar_total_;
+    ar_total_ += sb.ar_count();
+    for (uint32_t p : sb.patches) {
+      std::array<int, 2> local{-1, -1};
+      for (int side = 0; side < 2; ++side) {
+        const int face = mesh.patch_faces[p][side];
+        if (face < 0) continue;
+        local[side] = static_cast<int>(box.face_global.size());
+        box.face_global.push_back(face);
+      }
+      box.local_faces.push_back(local);
+    }
+    uint32_t offset = 0;
+    for (int c : sb.children) {
+      box.child_ar_base.push_back(offset);
+      offset += hierarchy_.boxes[c].ar_count();
+    }
+    box.counts.resize(sb.patches.size(), sb.ar_count(), offset);
+  }
+
+  // Files, box by box, in line order.
+  auto files = manifest_.files;
+  std::sort(files.begin(), files.end(),
+            [](const auto& a, const auto& b) { return std::tie(a.box, a.first_line) < std::tie(b.box, b.first_line); });
+  std::vector<uint64_t> next_line(boxes_.size(), 0);
+  for (const linestore::StoreFile& f : files) {
+    const fs::path path = dir / f.name;
+    if (f.box >= boxes_.size()) throw InputError(fmt::format("{}: box {} is not in the store's hierarchy", path.string(), f.box));
+    if (!fs::exists(path)) throw InputError(fmt::format("{}: missing (listed in {})", path.string(), manifest_path.string()));
+    if (fs::file_size(path) != f.bytes)
+      throw InputError(fmt::format("{}: {} bytes, the manifest says {} (truncated or from another run)", path.string(),
+                                   fs::file_size(path), f.bytes));
+    StoreBox& box = boxes_[f.box];
+    if (f.first_line != next_line[f.box])
+      throw InputError(fmt::format("{}: starts at line {}, expected {} (a shard is missing)", path.string(), f.first_line,
+                                   next_line[f.box]));
+    const linestore::BoxFileReader reader(path);
+    if (reader.box() != f.box || reader.lines() != f.lines)
+      throw InputError(fmt::format("{}: does not match the manifest (box or line count differs)", path.string()));
+    try {
+      box.counts.add(reader.counts());
+    } catch (const InputError&) {
+      throw InputError(fmt::format("{}: its counts do not fit box {} of this hierarchy", path.string(), f.box));
+    }
+    for (uint32_t c = 0; c < reader.chunks().size(); ++c) box.chunks.push_back({static_cast<uint32_t>(files_.size()), c});
+    files_.push_back(path);
+    next_line[f.box] += f.lines;
+    box.lines += f.lines;
+    box.events += f.events;
+    box.bytes += f.bytes;
+  }
+  for (size_t b = 0; b < boxes_.size(); ++b)
+    if (next_line[b] != recorded[b].lines)
+      throw InputError(fmt::format("{}: the files of box {} hold {} lines of {} (a shard is missing)",
+                                   manifest_path.string(), b, next_line[b], recorded[b].lines));
+
+  for (size_t b = 0; b < boxes_.size(); ++b) {
+    const SceneBox& sb = hierarchy_.boxes[b];
+    StoreBox& box = boxes_[b];
+    box.face_crossings.assign(box.face_global.size(), 0.0);
+    for (size_t k = 0; k < box.local_faces.size(); ++k)
+      for (int face : box.local_faces[k])
+        if (face >= 0) box.face_crossings[face] = box.counts.patch_crossings[k];
+    if (b == 0) continue;
+    box.transmittance = transmittances(sb, box.counts.wall_lines, box.counts.wall_open);
+    std::vector<bool> carried(sb.ar_count());
+    for (uint32_t r = 0; r < sb.ar_count(); ++r) carried[r] = box.counts.wall_lines[r] > box.counts.wall_open[r];
+    box.in_target = redirect_targets(sb, carried);
+    // Out power leaves along the parent's lines that cross the AR.
+    const StoreBox& parent = boxes_[sb.parent];
+    const auto& siblings = hierarchy_.boxes[sb.parent].children;
+    const size_t k = static_cast<size_t>(std::find(siblings.begin(), siblings.end(), static_cast<int>(b)) - siblings.begin());
+    for (uint32_t r = 0; r < sb.ar_count(); ++r) carried[r] = parent.counts.child_crossings[parent.child_ar_base[k] + r] > 0;
+    box.out_target = redirect_targets(sb, carried);
+  }
+}
+
+uint64_t BoxStore::lines() const {
+  uint64_t n = 0;
+  for (const StoreBox& b : boxes_) n += b.lines;
+  return n;
+}
+
+uint64_t BoxStore::events() const {
+  uint64_t n = 0;
+  for (const StoreBox& b : boxes_) n += b.events;
+  return n;
+}
+
+uint64_t BoxStore::bytes() const {
+  uint64_t n = 0;
+  for (const StoreBox& b : boxes_) n += b.bytes;
+  return n;
+}
+
+std::vector<double> BoxStore::face_crossings(size_t faces) const {
+  std::vector<double> out(faces, 0.0);
+  for (const StoreBox& b : boxes_)
+    for (size_t f = 0; f < b.face_global.size(); ++f) out[b.face_global[f]] = b.face_crossings[f];
+  return out;
+}
+
+void BoxStore::read(int box, uint64_t chunk, Cursor& cursor, linestore::DecodedChunk& out) const {
+  const auto [file, local] = boxes_[box].chunks[chunk];
+  auto& reader = cursor.readers[file];
+  if (!reader) reader = std::make_unique<linestore::BoxFileReader>(files_[file]);
+  reader->read_chunk(local, out);
+}
+
+}  // namespace mpath

@@ -1,0 +1,80 @@
+// The line store as the solver reads it (design.md sections 6 and 7): the
+// manifest checked against this run's scene and config, the hierarchy rebuilt
+// and checked against the one the store was made with, every box file opened
+// and checked, and per box what its passes need: its own faces (numbered
+// locally), exact crossing counts, transmittances of its walls' ARs, where
+// power held in an AR that no line can carry is moved, and its chunks.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+#include "box_file.h"
+#include "config.h"
+#include "hierarchy.h"
+#include "manifest.h"
+
+namespace mpath {
+
+inline constexpr uint32_t kNoTarget = 0xFFFFFFFFu;
+
+struct StoreBox {
+  // Faces of the box's own patches: local patch k has local faces
+  // local_faces[k] = {front, back or -1}; face_global maps them to the mesh.
+  std::vector<std::array<int, 2>> local_faces;
+  std::vector<int> face_global;
+  std::vector<double> face_crossings;  // per local face
+  linestore::BoxCounts counts;         // summed over the box's files
+  std::vector<double> transmittance;   // per wall AR: n_R^d / n_R, interpolated where n_R = 0
+  // Per wall AR, the AR whose power it hands on when no line can carry its
+  // own (itself when one can; kNoTarget when no AR of the box can):
+  std::vector<uint32_t> in_target;     // In: lines meeting something inside
+  std::vector<uint32_t> out_target;    // Out: lines of the parent crossing it
+  size_t ar_base = 0;                  // first of its ARs in the state's AR arrays
+  std::vector<uint32_t> child_ar_base; // per child: first of its ARs in counts.child_crossings
+  // Chunks: (file, chunk within the file), in line order.
+  std::vector<std::pair<uint32_t, uint32_t>> chunks;
+  uint64_t lines = 0, events = 0, bytes = 0;
+};
+
+class BoxStore {
+ public:
+  // Throws InputError naming the mismatching key, the differing hierarchy, or
+  // the missing, truncated or foreign file.
+  BoxStore(const Options& options, const PatchMesh& mesh);
+
+  const linestore::Manifest& manifest() const { return manifest_; }
+  const Hierarchy& hierarchy() const { return hierarchy_; }
+  const StoreBox& box(int b) const { return boxes_[b]; }
+  size_t box_count() const { return boxes_.size(); }
+  size_t ar_total() const { return ar_total_; }
+  uint64_t lines() const;
+  uint64_t events() const;
+  uint64_t bytes() const;
+  // Per mesh face: crossings by the lines of the box it belongs to.
+  std::vector<double> face_crossings(size_t faces) const;
+
+  // Per-thread readers, opened lazily.
+  struct Cursor {
+    std::vector<std::unique_ptr<linestore::BoxFileReader>> readers;
+  };
+  Cursor cursor() const { return Cursor{std::vector<std::unique_ptr<linestore::BoxFileReader>>(files_.size())}; }
+  void read(int box, uint64_t chunk, Cursor& cursor, linestore::DecodedChunk& out) const;
+
+ private:
+  linestore::Manifest manifest_;
+  Hierarchy hierarchy_;
+  std::vector<StoreBox> boxes_;
+  std::vector<std::filesystem::path> files_;
+  size_t ar_total_ = 0;
+};
+
+// Transmittance of every AR from its counts (exposed for tests).
+std::vector<double> transmittances(const SceneBox& box, const std::vector<uint32_t>& lines,
+                                   const std::vector<uint32_t>& open);
+// Per AR: itself if `valid`, else the nearest valid AR (same face, sector and
+// band, nearest VP; else the same face; else the box), kNoTarget if none is.
+std::vector<uint32_t> redirect_targets(const SceneBox& box, const std::vector<bool>& valid);
+
+}  // namespace mpath

@@ -1,0 +1,37 @@
+// Hierarchical Multipath over the stored lines (design.md section 7, paper
+// figure 5): one iteration is MP(root); MP(S) is one pass over S's stored
+// lines in which S's own faces, the ARs of S's walls (power that entered S)
+// and the ARs of S's child boxes (power that left them) send, and power
+// crossing a child box is split by the child's transmittance into what
+// enters it (the child's In) and what goes on; then MP(B) for every child B.
+// Boxes of one depth are independent and run in parallel, each box's lines in
+// shards. With the root box alone this is stored-line Multipath.
+#pragma once
+
+#include <vector>
+
+#include "box_store.h"
+#include "radiosity_state.h"
+#include "transport.h"
+
+namespace mpath {
+
+// Sizes the state's AR arrays for the store's boxes (zero power).
+void add_ar_state(const BoxStore& store, RadiosityState& state);
+
+// Per box, what its last pass did (for the report).
+struct BoxPassStats {
+  uint64_t lines = 0, hits = 0;
+  double seconds = 0;
+};
+
+// A pass takes the n lines of a chunk in the order 0, s, 2s, ... (mod n):
+// the step s, near n times the golden ratio and coprime to n, puts lines far
+// apart in the chunk (which is sorted by what they meet) next to each other.
+size_t line_stride(size_t n);
+
+// One iteration: MP(root) and, depth by depth, MP of every box.
+PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, unsigned pass, int threads,
+                                 std::vector<BoxPassStats>* per_box = nullptr);
+
+}  // namespace mpath

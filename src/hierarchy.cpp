@@ -1,0 +1,460 @@
+#include "hierarchy.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <queue>
+#include <set>
+
+namespace mpath {
+
+namespace {
+
+// Band limits: cos(theta) = sqrt(2/3) and sqrt(1/3) split the projected
+// solid angle of a hemisphere into thirds.
+const double kBand0 = std::sqrt(2.0 / 3.0);
+const double kBand1 = std::sqrt(1.0 / 3.0);
+// The finest VP grid a face gets (64 x 64 VPs, 98,304 ARs per face).
+constexpr int kMaxGrid = 64;
+// A group box that would enclose a single group item growing its surface by
+// less than this factor takes that item's contents instead of nesting it.
+constexpr double kAbsorbGrowth = 1.5;
+// A subscene is a part of its scene: a group whose box would have more than
+// this share of the scene box's surface (a room's shell grouped with what it
+// holds) is not formed.
+constexpr double kMaxSceneShare = 0.5;
+
+Bounds merged(const Bounds& a, const Bounds& b) {
+  Bounds m = a;
+  m.extend(b.lo);
+  m.extend(b.hi);
+  return m;
+}
+
+// The interior of `box` shrunk by `eps` meets the interior of `other`.
+bool interiors_overlap(const Bounds& box, const Bounds& other, double eps) {
+  for (int i = 0; i < 3; ++i)
+    if (other.hi[i] <= box.lo[i] + eps || other.lo[i] >= box.hi[i] - eps) return false;
+  return true;
+}
+
+bool contains(const Bounds& box, const Bounds& inner, double eps) {
+  for (int i = 0; i < 3; ++i)
+    if (inner.lo[i] < box.lo[i] - eps || inner.hi[i] > box.hi[i] + eps) return false;
+  return true;
+}
+
+}  // namespace
+
+uint32_t SceneBox::ar_at(int face, const Vec3& point, const Vec3& dir) const {
+  const int axis = face / 2;
+  const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const int n = grid[face];
+  const Vec3 size = bounds.size();
+  auto cell = [&](int k) {
+    if (!(size[k] > 0)) return 0;
+    const int c = static_cast<int>(std::floor((point[k] - bounds.lo[k]) / size[k] * n));
+    return std::clamp(c, 0, n - 1);
+  };
+  const int column = cell(u), row = cell(v);
+  // The direction turned to the face's outside: undirected lines get one AR.
+  const double outward = (face % 2) ? 1.0 : -1.0;
+  const double s = dir[axis] * outward >= 0 ? 1.0 : -1.0;
+  const double c = std::fabs(dir[axis]) / std::max(length(dir), 1e-300);
+  const int band = c > kBand0 ? 0 : (c > kBand1 ? 1 : 2);
+  const double phi = std::atan2(s * dir[v], s * dir[u]);  // (-pi, pi]
+  int sector = static_cast<int>(std::floor((phi + std::numbers::pi) / (2 * std::numbers::pi) * kSectors));
+  sector = std::clamp(sector, 0, kSectors - 1);
+  return ar_offset[face] + static_cast<uint32_t>(((row * n + column) * kSectors + sector) * kBands + band);
+}
+
+SceneBox::ArPlace SceneBox::place(uint32_t ar) const {
+  int face = 0;
+  while (face < 5 && ar >= ar_offset[face + 1]) ++face;
+  uint32_t local = ar - ar_offset[face];
+  ArPlace p;
+  p.face = face;
+  p.band = static_cast<int>(local % kBands);
+  local /= kBands;
+  p.sector = static_cast<int>(local % kSectors);
+  local /= kSectors;
+  p.column = static_cast<int>(local % grid[face]);
+  p.row = static_cast<int>(local / grid[face]);
+  return p;
+}
+
+uint32_t SceneBox::ar_of(const ArPlace& p) const {
+  return ar_offset[p.face] +
+         static_cast<uint32_t>(((p.row * grid[p.face] + p.column) * kSectors + p.sector) * kBands + p.band);
+}
+
+int Hierarchy::max_depth() const {
+  int d = 0;
+  for (const SceneBox& b : boxes) d = std::max(d, b.depth);
+  return d;
+}
+
+size_t Hierarchy::ar_total() const {
+  size_t n = 0;
+  for (size_t b = 1; b < boxes.size(); ++b) n += boxes[b].ar_count();
+  return n;
+}
+
+bool cross_box(const Bounds& box, const Vec3& org, const Vec3& dir, BoxCrossing& out) {
+  double t0 = -INFINITY, t1 = INFINITY;
+  int f0 = -1, f1 = -1;
+  for (int i = 0; i < 3; ++i) {
+    if (dir[i] == 0) {
+      if (org[i] < box.lo[i] || org[i] > box.hi[i]) return false;
+      continue;
+    }
+    double a = (box.lo[i] - org[i]) / dir[i], b = (box.hi[i] - org[i]) / dir[i];
+    int fa = 2 * i, fb = 2 * i + 1;
+    if (a > b) {
+      std::swap(a, b);
+      std::swap(fa, fb);
+    }
+    if (a > t0) {
+      t0 = a;
+      f0 = fa;
+    }
+    if (b < t1) {
+      t1 = b;
+      f1 = fb;
+    }
+  }
+  if (f0 < 0 || f1 < 0 || !(t1 > t0)) return false;
+  out = {t0, t1, f0, f1};
+  return true;
+}
+
+// Separating-axis test of a triangle against an axis-aligned box (the box's
+// three axes, the triangle's normal and the nine edge cross products). Touching
+// counts as not meeting, so polygons lying on a box wall stay outside.
+bool triangle_meets_box(const Vec3& a, const Vec3& b, const Vec3& c, const Bounds& box) {
+  const Vec3 center = box.center(), half = box.size() * 0.5;
+  const Vec3 v[3] = {a - center, b - center, c - center};
+  const Vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+  auto separated = [&](const Vec3& axis) {
+    const double len = length(axis);
+    if (len < 1e-300) return false;
+    double lo = INFINITY, hi = -INFINITY;
+    for (const Vec3& p : v) {
+      const double d = dot(p, axis);
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+    const double r = half.x * std::fabs(axis.x) + half.y * std::fabs(axis.y) + half.z * std::fabs(axis.z);
+    return lo >= r || hi <= -r;
+  };
+  for (int i = 0; i < 3; ++i) {
+    Vec3 axis;
+    axis[i] = 1;
+    if (separated(axis)) return false;
+  }
+  if (separated(cross(e[0], e[1]))) return false;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      Vec3 axis;
+      axis[j] = 1;
+      if (separated(cross(e[i], axis))) return false;
+    }
+  return true;
+}
+
+namespace {
+
+// A grouping item: an object or a group (a future box).
+struct Item {
+  Bounds bounds;
+  double area = 0;
+  bool alive = true;
+  int object = -1;  // for an object item
+  // For a group: its direct members (items), and the quotient that formed it.
+  std::vector<int> members;
+  double quotient = 0;
+};
+
+class Builder {
+ public:
+  Builder(const PatchMesh& mesh, const Options::Hierarchy& options) : mesh_(mesh), options_(options) {
+    int objects = 0;
+    for (const Patch& p : mesh.patches) objects = std::max(objects, p.object + 1);
+    object_patches_.resize(objects);
+    for (size_t p = 0; p < mesh.patches.size(); ++p) object_patches_[mesh.patches[p].object].push_back(static_cast<uint32_t>(p));
+    eps_ = 1e-6 * std::max(mesh.bounds.diagonal(), 1e-30);
+    scene_area_ = mesh.bounds.surface_area();
+    for (int o = 0; o < objects; ++o) {
+      if (object_patches_[o].empty()) continue;
+      Item item;
+      item.object = o;
+      for (uint32_t p : object_patches_[o])
+        for (uint32_t v : mesh.patches[p].v) item.bounds.extend(mesh.vertices[v]);
+      item.area = item.bounds.surface_area();
+      items_.push_back(std::move(item));
+    }
+  }
+
+  // Greedy bottom-up grouping: the pair with the largest quotient above the
+  // threshold first; each new group is an item at once.
+  void group() {
+    const size_t n = items_.size();
+    for (size_t a = 0; a < n; ++a)
+      for (size_t b = a + 1; b < n; ++b) push_pair(static_cast<int>(a), static_cast<int>(b));
+    while (!queue_.empty()) {
+      const Candidate c = queue_.top();
+      queue_.pop();
+      if (!items_[c.a].alive || !items_[c.b].alive) continue;
+      try_group(c);
+    }
+  }
+
+  Hierarchy finish() {
+    Hierarchy h;
+    h.patch_box.assign(mesh_.patches.size(), 0);
+    h.boxes.emplace_back();
+    SceneBox& root = h.boxes[0];
+    root.bounds = mesh_.bounds;
+    std::vector<int> top;
+    for (size_t i = 0; i < items_.size(); ++i)
+      if (items_[i].alive) top.push_back(static_cast<int>(i));
+    place(h, 0, top);
+    // Deeper than max_depth: dissolved into the ancestor at max_depth.
+    for (size_t b = 0; b < h.boxes.size(); ++b) finish_box(h, static_cast<int>(b));
+    // Boxes listed by depth, then index (children run after their parents).
+    h.depth_order.resize(h.boxes.size());
+    for (size_t b = 0; b < h.boxes.size(); ++b) h.depth_order[b] = static_cast<int>(b);
+    std::stable_sort(h.depth_order.begin(), h.depth_order.end(),
+                     [&](int a, int b) { return h.boxes[a].depth < h.boxes[b].depth; });
+    return h;
+  }
+
+ private:
+  struct Candidate {
+    double q;
+    int a, b;
+    bool operator<(const Candidate& o) const {
+      if (q != o.q) return q < o.q;
+      if (a != o.a) return a > o.a;
+      return b > o.b;
+    }
+  };
+
+  void push_pair(int a, int b) {
+    const Bounds m = merged(items_[a].bounds, items_[b].bounds);
+    const double area = m.surface_area();
+    if (!(area > 0) || area > kMaxSceneShare * scene_area_) return;
+    const double q = (items_[a].area + items_[b].area) / area;
+    if (q > options_.group_threshold) queue_.push({q, a, b});
+  }
+
+  void collect_objects(int item, std::vector<int>& out) const {
+    if (items_[item].object >= 0) out.push_back(items_[item].object);
+    for (int m : items_[item].members) collect_objects(m, out);
+  }
+
+  // Would a box with these bounds hold polygons of `item` (not a member) in its interior?
+  bool intrudes(int item, const Bounds& box) const {
+    if (!interiors_overlap(box, items_[item].bounds, eps_)) return false;
+    if (items_[item].object < 0) return true;  // another box overlapping: never
+    Bounds inner = box;
+    for (int i = 0; i < 3; ++i) {
+      inner.lo[i] += eps_;
+      inner.hi[i] -= eps_;
+    }
+    for (uint32_t p : object_patches_[items_[item].object]) {
+      const Patch& patch = mesh_.patches[p];
+      const Vec3& a = mesh_.vertices[patch.v[0]];
+      const Vec3& b = mesh_.vertices[patch.v[1]];
+      const Vec3& c = mesh_.vertices[patch.v[2]];
+      if (triangle_meets_box(a, b, c, inner)) return true;
+      if (!patch.is_triangle() && triangle_meets_box(a, c, mesh_.vertices[patch.v[3]], inner)) return true;
+    }
+    return false;
+  }
+
+  void try_group(const Candidate& c) {
+    std::vector<int> members = {c.a, c.b};
+    Bounds box = merged(items_[c.a].bounds, items_[c.b].bounds);
+    // Items lying wholly inside the box join it (a cup on a table); the box is
+    // refused if any other item reaches into it.
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (size_t i = 0; i < items_.size(); ++i) {
+        if (!items_[i].alive || std::find(members.begin(), members.end(), static_cast<int>(i)) != members.end()) continue;
+        if (!intrudes(static_cast<int>(i), box)) continue;
+        if (contains(box, items_[i].bounds, eps_)) {
+          members.push_back(static_cast<int>(i));
+          grew = true;
+        } else {
+          return;
+        }
+      }
+    }
+    const Vec3 size = box.size();
+    if (std::min({size.x, size.y, size.z}) < 1e3 * eps_) return;  // a flat box holds nothing inside
+    if (box.surface_area() > kMaxSceneShare * scene_area_) return;
+    Item group;
+    group.bounds = box;
+    group.area = box.surface_area();
+    group.quotient = c.q;
+    for (int m : members) {
+      Item& it = items_[m];
+      it.alive = false;
+      if (it.object < 0 && group.area < kAbsorbGrowth * it.area) {
+        group.members.insert(group.members.end(), it.members.begin(), it.members.end());
+        group.quotient = std::max(group.quotient, it.quotient);
+      } else {
+        group.members.push_back(m);
+      }
+    }
+    const int id = static_cast<int>(items_.size());
+    items_.push_back(std::move(group));
+    for (int i = 0; i < id; ++i)
+      if (items_[i].alive) push_pair(i, id);
+  }
+
+  // Puts `items` into box `box`: objects directly, groups as child boxes.
+  void place(Hierarchy& h, int box, const std::vector<int>& items) {
+    for (int i : items) {
+      const Item& it = items_[i];
+      if (it.object >= 0) {
+        h.boxes[box].objects.push_back(it.object);
+        continue;
+      }
+      if (h.boxes[box].depth + 1 > options_.max_depth) {
+        place(h, box, it.members);  // too deep: its contents stay in this box
+        continue;
+      }
+      const int child = static_cast<int>(h.boxes.size());
+      h.boxes.emplace_back();
+      h.boxes[child].parent = box;
+      h.boxes[child].depth = h.boxes[box].depth + 1;
+      h.boxes[child].quotient = it.quotient;
+      h.boxes[box].children.push_back(child);
+      place(h, child, it.members);
+    }
+  }
+
+  void finish_box(Hierarchy& h, int b) {
+    SceneBox& box = h.boxes[b];
+    std::sort(box.objects.begin(), box.objects.end());
+    for (int o : box.objects)
+      for (uint32_t p : object_patches_[o]) {
+        box.patches.push_back(p);
+        h.patch_box[p] = b;
+      }
+    std::sort(box.patches.begin(), box.patches.end());
+    if (b > 0) {
+      std::vector<int> objects;
+      std::vector<int> stack = {b};
+      box.bounds = Bounds{};
+      while (!stack.empty()) {
+        const int x = stack.back();
+        stack.pop_back();
+        objects.insert(objects.end(), h.boxes[x].objects.begin(), h.boxes[x].objects.end());
+        stack.insert(stack.end(), h.boxes[x].children.begin(), h.boxes[x].children.end());
+      }
+      for (int o : objects)
+        for (uint32_t p : object_patches_[o])
+          for (uint32_t v : mesh_.patches[p].v) box.bounds.extend(mesh_.vertices[v]);
+    }
+    // Totals over the box and its descendants.
+    std::set<int> polygons;
+    std::vector<int> stack = {b};
+    box.objects_total = 0;
+    while (!stack.empty()) {
+      const int x = stack.back();
+      stack.pop_back();
+      box.objects_total += static_cast<int>(h.boxes[x].objects.size());
+      for (int o : h.boxes[x].objects)
+        for (uint32_t p : object_patches_[o]) polygons.insert(mesh_.patches[p].polygon);
+      stack.insert(stack.end(), h.boxes[x].children.begin(), h.boxes[x].children.end());
+    }
+    box.polygons_total = polygons.size();
+    // Virtual patches: 2^k x 2^k per face, k grown until a VP's area is at most
+    // vp_area_ratio x max_patch_area (or vp_grid x vp_grid).
+    const Vec3 s = box.bounds.size();
+    const double limit = options_.vp_area_ratio * mesh_.max_patch_area;
+    box.ar_offset[0] = 0;
+    for (int f = 0; f < 6; ++f) {
+      const int axis = f / 2;
+      const double area = s[(axis + 1) % 3] * s[(axis + 2) % 3];
+      int n = options_.vp_grid;
+      if (n <= 0) {
+        n = 1;
+        while (n < kMaxGrid && area / (double(n) * n) > limit) n *= 2;
+      }
+      box.grid[f] = b == 0 ? 0 : n;  // the root has no walls of its own
+      box.ar_offset[f + 1] = box.ar_offset[f] + static_cast<uint32_t>(box.grid[f] * box.grid[f] * kArsPerVp);
+    }
+  }
+
+  const PatchMesh& mesh_;
+  Options::Hierarchy options_;
+  std::vector<std::vector<uint32_t>> object_patches_;
+  std::vector<Item> items_;
+  std::priority_queue<Candidate> queue_;
+  double eps_ = 0, scene_area_ = 0;
+};
+
+}  // namespace
+
+Hierarchy build_hierarchy(const PatchMesh& mesh, const Options::Hierarchy& options, bool flat) {
+  Options::Hierarchy o = options;
+  if (flat) o.max_depth = 0;
+  Builder builder(mesh, o);
+  if (o.max_depth > 0) builder.group();
+  return builder.finish();
+}
+
+std::string describe_hierarchy(const Hierarchy& h, const std::vector<uint64_t>& lines) {
+  std::string out = fmt::format("{} box(es), depth {}, {} ARs in subscene walls\n", h.boxes.size(), h.max_depth(), h.ar_total());
+  std::vector<std::pair<int, int>> stack = {{0, 0}};
+  while (!stack.empty()) {
+    const auto [b, indent] = stack.back();
+    stack.pop_back();
+    const SceneBox& box = h.boxes[b];
+    const Vec3 s = box.bounds.size();
+    out += fmt::format("{:{}}box {}{}: depth {}, {} object(s) ({} direct), {} polygon(s), {} patch(es) direct, "
+                       "{} child box(es), size {:.4g} x {:.4g} x {:.4g}",
+                       "", 2 * indent, b, b == 0 ? " (root)" : "", box.depth, box.objects_total, box.objects.size(),
+                       box.polygons_total, box.patches.size(), box.children.size(), s.x, s.y, s.z);
+    if (b > 0) out += fmt::format(", quotient {:.3f}, VP grid {}, {} ARs", box.quotient, box.grid[0], box.ar_count());
+    if (b < static_cast<int>(lines.size())) out += fmt::format(", {} lines", lines[b]);
+    out += "\n";
+    for (auto it = box.children.rbegin(); it != box.children.rend(); ++it) stack.push_back({*it, indent + 1});
+  }
+  return out;
+}
+
+}  // namespace mpath
+
+namespace mpath {
+
+std::vector<uint64_t> box_line_budget(const Hierarchy& h, const Options::Lines& lines) {
+  const uint64_t total = static_cast<uint64_t>(lines.total);
+  std::vector<uint64_t> out(h.boxes.size(), 0);
+  if (h.boxes.size() == 1) {
+    out[0] = total;
+    return out;
+  }
+  out[0] = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(total * lines.root_fraction)));
+  const double rest = static_cast<double>(total > out[0] ? total - out[0] : 0);
+  double weights = 0;
+  auto weight = [&](const SceneBox& b) { return lines.box_budget == "objects" ? double(b.objects_total) : b.quotient; };
+  for (size_t b = 1; b < h.boxes.size(); ++b) weights += weight(h.boxes[b]);
+  for (size_t b = 1; b < h.boxes.size(); ++b) {
+    const uint64_t share = weights > 0 ? static_cast<uint64_t>(std::llround(rest * weight(h.boxes[b]) / weights)) : 0;
+    out[b] = std::max<uint64_t>(share, 4ull * h.boxes[b].ar_count());
+  }
+  return out;
+}
+
+Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh) {
+  return build_hierarchy(mesh, options.hierarchy, options.solver.method != "hierarchical");
+}
+
+}  // namespace mpath
