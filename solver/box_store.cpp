@@ -182,7 +182,10 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
     } catch (const InputError&) {
       throw InputError(fmt::format("{}: its counts do not fit box {} of this hierarchy", path.string(), f.box));
     }
-    for (uint32_t c = 0; c < reader.chunks().size(); ++c) box.chunks.push_back({static_cast<uint32_t>(files_.size()), c});
+    for (uint32_t c = 0; c < reader.chunks().size(); ++c) {
+      box.chunks.push_back({static_cast<uint32_t>(files_.size()), c});
+      box.chunk_lines.push_back(reader.chunks()[c].lines);
+    }
     files_.push_back(path);
     next_line[f.box] += f.lines;
     box.lines += f.lines;
@@ -201,6 +204,14 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
     for (size_t k = 0; k < box.local_faces.size(); ++k)
       for (int face : box.local_faces[k])
         if (face >= 0) box.face_crossings[face] = box.counts.patch_crossings[k];
+    std::vector<double> c = box.face_crossings;
+    double coverage = 0;
+    if (!c.empty()) {
+      std::nth_element(c.begin(), c.begin() + c.size() / 2, c.end());
+      coverage = c[c.size() / 2] > 0 ? 16.0 / c[c.size() / 2] : 1.0;
+    }
+    if (box.lines > 0) coverage = std::max(coverage, 2.0 * sb.ar_count() / static_cast<double>(box.lines));
+    box.coverage = std::min(1.0, coverage);
     if (b == 0) continue;
     box.transmittance = transmittances(sb, box.counts.wall_lines, box.counts.wall_open);
     std::vector<bool> carried(sb.ar_count());

@@ -35,7 +35,11 @@ struct StoreBox {
   std::vector<uint32_t> child_ar_base; // per child: first of its ARs in counts.child_crossings
   // Chunks: (file, chunk within the file), in line order.
   std::vector<std::pair<uint32_t, uint32_t>> chunks;
+  std::vector<uint64_t> chunk_lines;  // lines in each
   uint64_t lines = 0, events = 0, bytes = 0;
+  // The least share of its lines a pass takes: enough for its median face to
+  // be crossed 16 times and its walls' ARs 4 times on average.
+  double coverage = 1;
 };
 
 class BoxStore {
@@ -61,6 +65,7 @@ class BoxStore {
   };
   Cursor cursor() const { return Cursor{std::vector<std::unique_ptr<linestore::BoxFileReader>>(files_.size())}; }
   void read(int box, uint64_t chunk, Cursor& cursor, linestore::DecodedChunk& out) const;
+  uint64_t chunk_lines(int box, uint64_t chunk) const { return boxes_[box].chunk_lines[chunk]; }
 
  private:
   linestore::Manifest manifest_;

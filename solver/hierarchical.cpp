@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <numeric>
 
@@ -21,41 +22,80 @@ void add_ar_state(const BoxStore& store, RadiosityState& state) {
 
 namespace {
 
+// Of a chunk, the lines a pass takes (the first, in stride order).
+struct ChunkPart {
+  uint64_t chunk;
+  uint64_t lines;
+};
+
+// An AR's power to send in a pass: its quota and the share of it one line carries.
+struct ArInput {
+  double quota[3] = {0, 0, 0};
+  double share = 0;
+};
+
 // What one box's pass reads and never writes.
 struct BoxInputs {
   const StoreBox* box = nullptr;
   int channels = 3;
   std::vector<FaceInput> faces;       // local faces
-  std::vector<double> wall_send;      // per wall AR and channel: power per line sent inwards
-  std::vector<double> child_send;     // per child AR and channel: Out power per line sent outwards
+  std::vector<ArInput> wall;          // per wall AR: In, sent inwards
+  std::vector<ArInput> child;         // per child AR: Out, sent outwards
   std::vector<const double*> child_t; // per child: transmittances of its ARs
-  std::vector<uint32_t> child_base;   // per child: first of its ARs in child_send
+  std::vector<uint32_t> child_base;   // per child: first of its ARs in `child`
   uint32_t patches = 0, children = 0, wall_ars = 0;
   std::vector<uint32_t> child_ars;
+  double fraction = 1;                // of the box's lines this pass takes
+  std::vector<ChunkPart> parts;       // which
 };
 
 // A shard's private accumulators for one box's pass.
 struct alignas(128) BoxShard {
   ShardAccumulator faces;
-  std::vector<double> wall_out;  // power reaching the box's walls: its Out
-  std::vector<double> child_in;  // power entering the children: their In
+  std::vector<double> wall_out;    // power reaching the box's walls: its Out
+  std::vector<double> child_in;    // power entering the children: their In
+  std::vector<double> wall_used;   // fraction of each wall AR's quota sent
+  std::vector<double> child_used;  // and of each child AR's
 };
 
-// Moves the power held in a box's ARs (from `base` in `held`) into `quota`,
-// each AR's into its target's slot; an AR with no target keeps its power.
-void move_held(std::vector<double>& held, size_t base, const std::vector<uint32_t>& target, int ch,
-               std::vector<double>& quota) {
+// Moves the power held in a box's ARs (from `base` in `held`) into the
+// quotas, each AR's into its target's; an AR with no target keeps its power.
+void move_held(std::vector<double>& held, size_t base, const std::vector<uint32_t>& target, int ch, ArInput* quota) {
   for (size_t r = 0; r < target.size(); ++r) {
     if (target[r] == kNoTarget) continue;
     for (int c = 0; c < ch; ++c) {
       double& h = held[(base + r) * ch + c];
-      quota[target[r] * ch + c] += h;
+      quota[target[r]].quota[c] += h;
       h = 0;
     }
   }
 }
 
-BoxInputs start_box(const BoxStore& store, int b, RadiosityState& state) {
+// The lines a pass over `fraction` of a box's lines takes: a run of whole
+// chunks (each holds lines spread over the whole box) from a place that
+// moves from pass to pass, and the first lines, in stride order, of the
+// last. Every line when `fraction` is 1.
+std::vector<ChunkPart> pass_parts(const BoxStore& store, int b, double fraction, unsigned pass) {
+  const StoreBox& box = store.box(b);
+  const uint64_t chunks = box.chunks.size();
+  std::vector<ChunkPart> out;
+  if (chunks == 0) return out;
+  if (fraction >= 1.0) {
+    for (uint64_t c = 0; c < chunks; ++c) out.push_back({c, box.chunk_lines[c]});
+    return out;
+  }
+  uint64_t need = std::max<uint64_t>(1, static_cast<uint64_t>(std::ceil(fraction * static_cast<double>(box.lines))));
+  const uint64_t first = static_cast<uint64_t>(std::fmod(pass * 0.6180339887498949, 1.0) * static_cast<double>(chunks));
+  for (uint64_t i = 0; i < chunks && need > 0; ++i) {
+    const uint64_t c = (first + i) % chunks;
+    const uint64_t take = std::min(need, box.chunk_lines[c]);
+    out.push_back({c, take});
+    need -= take;
+  }
+  return out;
+}
+
+BoxInputs start_box(const BoxStore& store, int b, RadiosityState& state, double power_per_line, unsigned pass) {
   const StoreBox& box = store.box(b);
   const SceneBox& sb = store.hierarchy().boxes[b];
   const int ch = state.channels;
@@ -65,6 +105,7 @@ BoxInputs start_box(const BoxStore& store, int b, RadiosityState& state) {
   in.patches = static_cast<uint32_t>(box.local_faces.size());
   in.children = static_cast<uint32_t>(sb.children.size());
   in.wall_ars = sb.ar_count();
+  double power = 0;  // what the pass has to send, W
   // Faces: their unshot power becomes this pass's quota.
   in.faces.resize(box.face_global.size());
   for (size_t f = 0; f < in.faces.size(); ++f) {
@@ -74,18 +115,12 @@ BoxInputs start_box(const BoxStore& store, int b, RadiosityState& state) {
       face.quota[c] = state.unshot[state.at(g, c)];
       face.rho[c] = state.rho[state.at(g, c)];
       state.unshot[state.at(g, c)] = 0;
+      power += face.quota[c];
     }
-    face.share = box.face_crossings[f] > 0 ? 1.0 / box.face_crossings[f] : 0.0;
   }
   // Walls: In is sent inwards along the lines that meet something inside.
-  in.wall_send.assign(size_t{in.wall_ars} * ch, 0.0);
-  if (b > 0) {
-    move_held(state.ar_in, box.ar_base, box.in_target, ch, in.wall_send);
-    for (uint32_t r = 0; r < in.wall_ars; ++r) {
-      const double carriers = double(box.counts.wall_lines[r]) - double(box.counts.wall_open[r]);
-      for (int c = 0; c < ch; ++c) in.wall_send[r * ch + c] = carriers > 0 ? in.wall_send[r * ch + c] / carriers : 0.0;
-    }
-  }
+  in.wall.assign(in.wall_ars, ArInput{});
+  if (b > 0) move_held(state.ar_in, box.ar_base, box.in_target, ch, in.wall.data());
   // Children: Out is sent outwards along this box's lines that cross it.
   uint32_t total = 0;
   for (int child : sb.children) {
@@ -93,18 +128,38 @@ BoxInputs start_box(const BoxStore& store, int b, RadiosityState& state) {
     in.child_ars.push_back(store.hierarchy().boxes[child].ar_count());
     total += store.hierarchy().boxes[child].ar_count();
   }
-  in.child_send.assign(size_t{total} * ch, 0.0);
+  in.child.assign(total, ArInput{});
   for (uint32_t k = 0; k < in.children; ++k) {
     const StoreBox& child = store.box(sb.children[k]);
-    std::vector<double> quota(size_t{in.child_ars[k]} * ch, 0.0);
-    move_held(state.ar_out, child.ar_base, child.out_target, ch, quota);
-    for (uint32_t r = 0; r < in.child_ars[k]; ++r) {
-      const double crossings = box.counts.child_crossings[box.child_ar_base[k] + r];
-      for (int c = 0; c < ch; ++c)
-        in.child_send[(in.child_base[k] + r) * ch + c] = crossings > 0 ? quota[r * ch + c] / crossings : 0.0;
-    }
+    move_held(state.ar_out, child.ar_base, child.out_target, ch, &in.child[in.child_base[k]]);
     in.child_t.push_back(child.transmittance.data());
   }
+  for (const auto* ars : {&in.wall, &in.child})
+    for (const ArInput& a : *ars)
+      for (int c = 0; c < ch; ++c) power += a.quota[c];
+
+  // How many lines: all of them, or as many as carry `power_per_line` each,
+  // at least the box's coverage.
+  if (power_per_line > 0 && box.lines > 0) {
+    const double wanted = power / (power_per_line * static_cast<double>(box.lines));
+    in.fraction = std::clamp(wanted, box.coverage, 1.0);
+  }
+  in.parts = pass_parts(store, b, in.fraction, pass);
+  if (in.fraction < 1.0) {
+    uint64_t lines = 0;
+    for (const ChunkPart& p : in.parts) lines += p.lines;
+    in.fraction = static_cast<double>(lines) / static_cast<double>(box.lines);
+  }
+  // What a line carries: the quota over the crossings expected in this pass
+  // (all of them when the pass takes every line).
+  auto share = [&](double crossings) { return crossings > 0 ? 1.0 / (crossings * in.fraction) : 0.0; };
+  for (size_t f = 0; f < in.faces.size(); ++f) in.faces[f].share = share(box.face_crossings[f]);
+  if (b > 0)
+    for (uint32_t r = 0; r < in.wall_ars; ++r)
+      in.wall[r].share = share(double(box.counts.wall_lines[r]) - double(box.counts.wall_open[r]));
+  for (uint32_t k = 0; k < in.children; ++k)
+    for (uint32_t r = 0; r < in.child_ars[k]; ++r)
+      in.child[in.child_base[k] + r].share = share(box.counts.child_crossings[box.child_ar_base[k] + r]);
   return in;
 }
 
@@ -129,7 +184,8 @@ bool chunk_fits(const BoxInputs& in, const linestore::DecodedChunk& chunk) {
 
 // One line of the box in both directions (design.md section 7): every face,
 // wall AR and child box on it sends before anything is received.
-void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t entry, uint32_t exit, BoxShard& shard) {
+void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t entry, uint32_t exit, BoxShard& shard,
+                        double allowance) {
   ShardAccumulator& acc = shard.faces;
   const int ch = in.channels;
   ++acc.lines;
@@ -151,11 +207,20 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
     }
     if (any) sends.push_back(s);
   };
+  // An AR sends its share of its quota, never more in all than the shard's allowance.
+  auto send_ar = [&](const ArInput& input, double& used, int from, int dir) {
+    double fraction = std::min(input.share, allowance - used);
+    if (!(fraction > 0)) return;
+    used += fraction;
+    double power[3];
+    for (int c = 0; c < ch; ++c) power[c] = input.quota[c] * fraction;
+    send_power(from, dir, power);
+  };
   auto send_face = [&](int face, int from, int dir) {
     if (face < 0) return;
     const FaceInput& input = in.faces[face];
     FaceAccumulator& a = acc.faces[face];
-    double fraction = std::min(input.share, 1.0 - a.quota_used);
+    double fraction = std::min(input.share, allowance - a.quota_used);
     if (fraction < 0) fraction = 0;
     a.quota_used += fraction;
     double power[3];
@@ -166,7 +231,7 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
     send_power(from, dir, power);
   };
   const int n = static_cast<int>(m);
-  if (entry != kNoAr) send_power(-1, +1, &in.wall_send[size_t{entry} * ch]);
+  if (entry != kNoAr) send_ar(in.wall[entry], shard.wall_used[entry], -1, +1);
   for (int i = 0; i < n; ++i) {
     const Event& e = ev[i];
     if (e.kind == Event::patch) {
@@ -175,11 +240,11 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
       send_face(e.along ? f[1] : f[0], i, -1);
     } else {
       const uint32_t base = in.child_base[e.id];
-      send_power(i, +1, &in.child_send[size_t{base + e.exit_ar} * ch]);
-      send_power(i, -1, &in.child_send[size_t{base + e.entry_ar} * ch]);
+      send_ar(in.child[base + e.exit_ar], shard.child_used[base + e.exit_ar], i, +1);
+      send_ar(in.child[base + e.entry_ar], shard.child_used[base + e.entry_ar], i, -1);
     }
   }
-  if (exit != kNoAr) send_power(n, -1, &in.wall_send[size_t{exit} * ch]);
+  if (exit != kNoAr) send_ar(in.wall[exit], shard.wall_used[exit], n, -1);
 
   for (Send& s : sends) {
     double* p = s.power;
@@ -234,22 +299,34 @@ struct BoxResult {
   BoxPassStats stats;
 };
 
-BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int threads, Progress& progress) {
+BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int threads, double power_per_line,
+                   unsigned pass, Progress& progress) {
   const auto start = std::chrono::steady_clock::now();
-  const BoxInputs in = start_box(store, b, state);
+  const BoxInputs in = start_box(store, b, state, power_per_line, pass);
   const StoreBox& box = store.box(b);
   const int ch = state.channels;
-  const uint64_t chunks = box.chunks.size();
+  const uint64_t chunks = in.parts.size();
+  const bool every_line = in.fraction >= 1.0;
+  uint64_t pass_lines = 0;
+  for (const ChunkPart& p : in.parts) pass_lines += p.lines;
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
   std::vector<BoxShard> acc(shards);
   tbb::parallel_for(0, shards, [&](int s) {
     BoxShard& a = acc[s];
     a.faces.reset(in.faces.size());
     a.wall_out.assign(size_t{in.wall_ars} * ch, 0.0);
-    a.child_in.assign(in.child_send.size(), 0.0);
+    a.child_in.assign(in.child.size() * ch, 0.0);
+    a.wall_used.assign(in.wall.size(), 0.0);
+    a.child_used.assign(in.child.size(), 0.0);
+    // With every line, the exact crossing counts make the shares add up to
+    // each quota; with a part of them, each shard may send its part only.
+    uint64_t shard_lines = 0;
+    for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) shard_lines += in.parts[i].lines;
+    const double allowance = every_line || pass_lines == 0 ? 1.0 : double(shard_lines) / double(pass_lines);
     BoxStore::Cursor cursor = store.cursor();
     linestore::DecodedChunk chunk;
-    for (uint64_t c = chunks * s / shards; c < chunks * (s + 1) / shards; ++c) {
+    for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) {
+      const uint64_t c = in.parts[i].chunk;
       store.read(b, c, cursor, chunk);
       if (!chunk_fits(in, chunk))
         throw InputError(fmt::format("store: box {} chunk {} names patches, boxes or ARs the box does not have "
@@ -261,13 +338,15 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
       // them in an order unrelated to their geometry (docs/algorithm.md).
       const size_t n = chunk.lines();
       const size_t stride = line_stride(n);
-      for (size_t i = 0, l = 0; i < n; ++i, l = (l + stride) % n)
+      const size_t take = std::min<size_t>(n, in.parts[i].lines);
+      for (size_t k = 0, l = 0; k < take; ++k, l = (l + stride) % n)
         transport_box_line(in, chunk.events.data() + chunk.first[l], chunk.first[l + 1] - chunk.first[l],
-                           chunk.entry_ar[l], chunk.exit_ar[l], a);
-      progress.advance(chunk.lines());
+                           chunk.entry_ar[l], chunk.exit_ar[l], a, allowance);
+      progress.advance(take);
     }
   });
-  // Merge in shard order: faces, the box's Out, the children's In.
+  // Merge in shard order: faces, the box's Out, the children's In, and what
+  // no line took back where it was held.
   BoxResult result;
   for (size_t f = 0; f < in.faces.size(); ++f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
@@ -282,9 +361,25 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
       }
     }
   }
+  const auto& children = store.hierarchy().boxes[b].children;
+  auto unsent = [&](const std::vector<double> BoxShard::*used, size_t i) {
+    double u = 1.0;
+    for (const BoxShard& a : acc) u -= (a.*used)[i];
+    return u;
+  };
+  for (uint32_t r = 0; r < in.wall_ars; ++r) {
+    const double u = unsent(&BoxShard::wall_used, r);
+    for (int c = 0; c < ch; ++c) state.ar_in[(box.ar_base + r) * ch + c] += in.wall[r].quota[c] * u;
+  }
+  for (size_t k = 0; k < children.size(); ++k) {
+    const StoreBox& child = store.box(children[k]);
+    for (uint32_t r = 0; r < in.child_ars[k]; ++r) {
+      const double u = unsent(&BoxShard::child_used, in.child_base[k] + r);
+      for (int c = 0; c < ch; ++c) state.ar_out[(child.ar_base + r) * ch + c] += in.child[in.child_base[k] + r].quota[c] * u;
+    }
+  }
   for (const BoxShard& a : acc) {
     for (size_t i = 0; i < a.wall_out.size(); ++i) state.ar_out[box.ar_base * ch + i] += a.wall_out[i];
-    const auto& children = store.hierarchy().boxes[b].children;
     for (size_t k = 0; k < children.size(); ++k) {
       const StoreBox& child = store.box(children[k]);
       for (size_t i = 0; i < size_t{in.child_ars[k]} * ch; ++i)
@@ -311,35 +406,55 @@ size_t line_stride(size_t n) {
 }
 
 PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, unsigned pass, int threads,
-                                 std::vector<BoxPassStats>* per_box) {
+                                 double power_per_line, bool v_cycle, std::vector<BoxPassStats>* per_box) {
   const auto start = std::chrono::steady_clock::now();
   const Hierarchy& h = store.hierarchy();
   if (state.ar_in.size() != store.ar_total() * state.channels) add_ar_state(store, state);
-  std::vector<BoxResult> results(h.boxes.size());
-  Progress progress(fmt::format("iteration {}", pass), store.lines(), "lines", true);
-  // Depth by depth: a box's pass needs its parent's (the power entering it).
-  const auto& order = h.depth_order;
-  for (size_t lo = 0; lo < order.size();) {
-    size_t hi = lo;
-    while (hi < order.size() && h.boxes[order[hi]].depth == h.boxes[order[lo]].depth) ++hi;
-    tbb::parallel_for(lo, hi, [&](size_t i) { results[order[i]] = box_pass(store, order[i], state, threads, progress); });
-    lo = hi;
+  // The passes of the iteration, depth by depth: a box's pass needs its
+  // parent's (the power entering it). The V-cycle runs the subscenes deepest
+  // first before the root, so that what they send out crosses every level
+  // up in the same iteration, then top-down as MP(root) does.
+  const int depth = h.max_depth();
+  std::vector<int> levels;
+  if (v_cycle)
+    for (int d = depth; d >= 1; --d) levels.push_back(d);
+  for (int d = 0; d <= depth; ++d) levels.push_back(d);
+  std::vector<std::vector<int>> at_depth(depth + 1);
+  for (int b : h.depth_order) at_depth[h.boxes[b].depth].push_back(b);
+
+  uint64_t most_lines = 0;  // every box's lines in every pass: how many a box takes is known at its start
+  for (int level : levels)
+    for (int b : at_depth[level]) most_lines += store.box(b).lines;
+  Progress progress(fmt::format("iteration {}", pass), most_lines, "lines", true);
+  std::vector<std::vector<BoxResult>> results(levels.size());
+  for (size_t i = 0; i < levels.size(); ++i) {
+    const std::vector<int>& boxes = at_depth[levels[i]];
+    const unsigned rotation = pass * 2 + (i < levels.size() - depth - 1 ? 1 : 0);  // the up-sweep takes other lines
+    results[i].resize(boxes.size());
+    tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t k) {
+      results[i][k] = box_pass(store, boxes[k], state, threads, power_per_line, rotation, progress);
+    });
   }
   progress.finish();
   PassStats stats;
   stats.pass = static_cast<int>(pass);
-  for (size_t b = 0; b < results.size(); ++b) {
-    for (int c = 0; c < state.channels; ++c) {
-      state.energy.absorbed[c] += results[b].absorbed[c];
-      state.energy.escaped[c] += results[b].escaped[c];
+  if (per_box) per_box->assign(h.boxes.size(), BoxPassStats{});
+  for (size_t i = 0; i < levels.size(); ++i)
+    for (size_t k = 0; k < results[i].size(); ++k) {
+      const BoxResult& r = results[i][k];
+      for (int c = 0; c < state.channels; ++c) {
+        state.energy.absorbed[c] += r.absorbed[c];
+        state.energy.escaped[c] += r.escaped[c];
+      }
+      stats.lines += r.stats.lines;
+      stats.hits += r.stats.hits;
+      if (per_box) {
+        BoxPassStats& p = (*per_box)[at_depth[levels[i]][k]];
+        p.lines += r.stats.lines;
+        p.hits += r.stats.hits;
+        p.seconds += r.stats.seconds;
+      }
     }
-    stats.lines += results[b].stats.lines;
-    stats.hits += results[b].stats.hits;
-  }
-  if (per_box) {
-    per_box->resize(results.size());
-    for (size_t b = 0; b < results.size(); ++b) (*per_box)[b] = results[b].stats;
-  }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.unshot_fraction = state.remaining_fraction();
   return stats;

@@ -19,7 +19,7 @@ namespace mpath {
 // Sizes the state's AR arrays for the store's boxes (zero power).
 void add_ar_state(const BoxStore& store, RadiosityState& state);
 
-// Per box, what its last pass did (for the report).
+// Per box, what its passes of the last iteration did (for the report).
 struct BoxPassStats {
   uint64_t lines = 0, hits = 0;
   double seconds = 0;
@@ -30,8 +30,15 @@ struct BoxPassStats {
 // apart in the chunk (which is sorted by what they meet) next to each other.
 size_t line_stride(size_t n);
 
-// One iteration: MP(root) and, depth by depth, MP of every box.
+// One iteration: MP(root) and, depth by depth, MP of every box. Each box's
+// pass takes every line of the box (exact crossing counts) when
+// `power_per_line` is 0; otherwise as many as carry about that power each
+// (at least the box's coverage): a run of chunks, counts scaled, each face
+// and AR sending at most its quota and keeping what no line took.
+// `v_cycle`: the subscenes also pass before the root, deepest first, so that
+// power crosses every level up and down in one iteration (docs/algorithm.md).
 PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, unsigned pass, int threads,
+                                 double power_per_line = 0.0, bool v_cycle = false,
                                  std::vector<BoxPassStats>* per_box = nullptr);
 
 }  // namespace mpath

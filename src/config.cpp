@@ -198,6 +198,13 @@ const std::map<std::string, Setter>& setters() {
          if (o.first_shot.mode != "auto" && o.first_shot.mode != "local")
            bad_value(s, fmt::format("unknown mode '{}' (known: auto, local)", o.first_shot.mode));
        }},
+      {"solver.adaptive_lines", [](auto& n, auto& s, Options& o) { o.solver.adaptive_lines = get_bool(n, s); }},
+      {"solver.schedule",
+       [](auto& n, auto& s, Options& o) {
+         o.solver.schedule = get_string(n, s);
+         if (o.solver.schedule != "v-cycle" && o.solver.schedule != "top-down")
+           bad_value(s, fmt::format("unknown schedule '{}' (known: v-cycle, top-down)", o.solver.schedule));
+       }},
       {"solver.method",
        [](auto& n, auto& s, Options& o) {
          o.solver.method = get_string(n, s);
@@ -317,7 +324,8 @@ toml::table options_table(const Options& o) {
                                  {"accelerate", o.first_shot.accelerate},
                                  {"mode", o.first_shot.mode}}},
       {"solver", toml::table{{"method", o.solver.method}, {"iterations", o.solver.iterations},
-                             {"tolerance", o.solver.tolerance}, {"threads", o.solver.threads}}},
+                             {"tolerance", o.solver.tolerance}, {"threads", o.solver.threads},
+                             {"adaptive_lines", o.solver.adaptive_lines}, {"schedule", o.solver.schedule}}},
       {"store", toml::table{{"dir", o.store.dir.string()}, {"chunk_lines", o.store.chunk_lines},
                             {"zstd_level", o.store.zstd_level}}},
       {"output", toml::table{{"dir", o.output.dir.string()}, {"exr", o.output.exr}, {"png", o.output.png}}},

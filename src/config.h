@@ -71,6 +71,12 @@ struct Options {
     std::string method = "hierarchical";
     int iterations = 10;
     double tolerance = 1e-3;
+    // Stored-line methods: later iterations stream a share of each box's
+    // lines in proportion to the power left (docs/algorithm.md).
+    bool adaptive_lines = true;
+    // Order of the box passes in an iteration: "v-cycle" (subscenes deepest
+    // first, the root, then top-down) or "top-down" (MP(root) of paper figure 5).
+    std::string schedule = "v-cycle";
     int threads = 0;  // 0: all hardware threads
   } solver;
 
