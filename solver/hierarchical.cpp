@@ -398,6 +398,11 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
 
 }  // namespace
 
+double line_power(const Options& options, const BoxStore& store, const IterationLog& log) {
+  if (!options.solver.adaptive_lines || log.passes.empty() || log.first_unshot <= 0 || store.lines() == 0) return 0.0;
+  return log.first_unshot / static_cast<double>(store.lines());
+}
+
 size_t line_stride(size_t n) {
   if (n < 3) return 1;
   size_t s = static_cast<size_t>(0.6180339887498949 * static_cast<double>(n)) | 1;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "box_store.h"
+#include "classic.h"
 #include "radiosity_state.h"
 #include "transport.h"
 
@@ -24,6 +25,13 @@ struct BoxPassStats {
   uint64_t lines = 0, hits = 0;
   double seconds = 0;
 };
+
+// The power a stored line carries in later iterations: 0 (every line of
+// every box, every iteration) while solver.adaptive_lines is off or before
+// the first iteration; else the first iteration's, so that each box's pass
+// takes lines in proportion to the power it has to send, as classic
+// Multipath casts fewer lines in later passes (docs/algorithm.md).
+double line_power(const Options& options, const BoxStore& store, const IterationLog& log);
 
 // A pass takes the n lines of a chunk in the order 0, s, 2s, ... (mod n):
 // the step s, near n times the golden ratio and coprime to n, puts lines far

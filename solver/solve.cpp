@@ -76,16 +76,6 @@ json energy_json(const RadiosityState& s) {
                             {"in_transit", held_rgb}}}};
 }
 
-// The power a stored line carries in later iterations: none (every line of
-// every box, every iteration) while solver.adaptive_lines is off; else the
-// first iteration's, so that each box's pass takes lines in proportion to
-// the power it has to send, as classic Multipath casts fewer lines in later
-// passes (docs/algorithm.md).
-double power_per_line(const Options& options, const BoxStore& store, const IterationLog& log) {
-  if (!options.solver.adaptive_lines || log.passes.empty() || log.first_unshot <= 0) return 0.0;
-  return log.first_unshot / static_cast<double>(store.lines());
-}
-
 void write_json(const std::filesystem::path& path, const json& j) {
   AtomicFile file(path);
   file.stream() << j.dump(2) << "\n";
@@ -147,7 +137,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   if (store) {
     iterate(options, state, iterations,
             [&](unsigned pass) {
-              return hierarchical_iteration(*store, state, pass, threads, power_per_line(options, *store, iterations),
+              return hierarchical_iteration(*store, state, pass, threads, line_power(options, *store, iterations),
                                             options.solver.schedule == "v-cycle", &box_stats);
             }, save);
   } else {

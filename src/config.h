@@ -42,7 +42,7 @@ struct Options {
   } mesh;
 
   struct Hierarchy {
-    double group_threshold = 1.0;
+    double group_threshold = 0.4;  // docs/algorithm.md: a table and its legs group at about 0.4
     double vp_area_ratio = 16.0;
     int vp_grid = 0;  // 0: derived from vp_area_ratio
     int max_depth = 8;

@@ -193,8 +193,29 @@ class Builder {
       for (uint32_t p : object_patches_[o])
         for (uint32_t v : mesh.patches[p].v) item.bounds.extend(mesh.vertices[v]);
       item.area = item.bounds.surface_area();
+      if (is_shell(item.bounds)) {
+        shell_.push_back(o);  // stays in the root, never grouped
+        continue;
+      }
       items_.push_back(std::move(item));
     }
+  }
+
+  // The scene's shell: an object lying against a side of the scene box and
+  // spanning at least half of it both ways (a floor, a wall, a ceiling). The
+  // area quotient favours grouping such a flat, large object with whatever
+  // stands near it, which would make a subscene of half the room; the shell
+  // belongs to the root.
+  bool is_shell(const Bounds& b) const {
+    const Bounds& scene = mesh_.bounds;
+    const Vec3 s = scene.size(), e = b.size();
+    for (int axis = 0; axis < 3; ++axis) {
+      const bool on_side = std::fabs(b.lo[axis] - scene.lo[axis]) <= 1e3 * eps_ ||
+                           std::fabs(b.hi[axis] - scene.hi[axis]) <= 1e3 * eps_;
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      if (on_side && e[u] >= 0.5 * s[u] && e[v] >= 0.5 * s[v]) return true;
+    }
+    return false;
   }
 
   // Greedy bottom-up grouping: the pair with the largest quotient above the
@@ -218,6 +239,7 @@ class Builder {
     SceneBox& root = h.boxes[0];
     root.bounds = mesh_.bounds;
     std::vector<int> top;
+    root.objects = shell_;
     for (size_t i = 0; i < items_.size(); ++i)
       if (items_[i].alive) top.push_back(static_cast<int>(i));
     place(h, 0, top);
@@ -259,12 +281,16 @@ class Builder {
   bool intrudes(int item, const Bounds& box) const {
     if (!interiors_overlap(box, items_[item].bounds, eps_)) return false;
     if (items_[item].object < 0) return true;  // another box overlapping: never
+    return object_meets(items_[item].object, box);
+  }
+
+  bool object_meets(int object, const Bounds& box) const {
     Bounds inner = box;
     for (int i = 0; i < 3; ++i) {
       inner.lo[i] += eps_;
       inner.hi[i] -= eps_;
     }
-    for (uint32_t p : object_patches_[items_[item].object]) {
+    for (uint32_t p : object_patches_[object]) {
       const Patch& patch = mesh_.patches[p];
       const Vec3& a = mesh_.vertices[patch.v[0]];
       const Vec3& b = mesh_.vertices[patch.v[1]];
@@ -278,21 +304,23 @@ class Builder {
   void try_group(const Candidate& c) {
     std::vector<int> members = {c.a, c.b};
     Bounds box = merged(items_[c.a].bounds, items_[c.b].bounds);
-    // Items lying wholly inside the box join it (a cup on a table); the box is
-    // refused if any other item reaches into it.
+    // Items reaching into the box join it (a cup on a table, a chair pushed
+    // under it), the box growing to hold them, unless one is larger than the
+    // box: then the box is refused (it would cut through a wall, a floor).
     for (bool grew = true; grew;) {
       grew = false;
       for (size_t i = 0; i < items_.size(); ++i) {
         if (!items_[i].alive || std::find(members.begin(), members.end(), static_cast<int>(i)) != members.end()) continue;
         if (!intrudes(static_cast<int>(i), box)) continue;
-        if (contains(box, items_[i].bounds, eps_)) {
-          members.push_back(static_cast<int>(i));
-          grew = true;
-        } else {
-          return;
-        }
+        if (!contains(box, items_[i].bounds, eps_) && items_[i].area > box.surface_area()) return;
+        members.push_back(static_cast<int>(i));
+        box = merged(box, items_[i].bounds);
+        if (box.surface_area() > kMaxSceneShare * scene_area_) return;
+        grew = true;
       }
     }
+    for (int o : shell_)
+      if (object_meets(o, box)) return;
     const Vec3 size = box.size();
     if (std::min({size.x, size.y, size.z}) < 1e3 * eps_) return;  // a flat box holds nothing inside
     if (box.surface_area() > kMaxSceneShare * scene_area_) return;
@@ -396,6 +424,7 @@ class Builder {
   Options::Hierarchy options_;
   std::vector<std::vector<uint32_t>> object_patches_;
   std::vector<Item> items_;
+  std::vector<int> shell_;  // objects of the scene's shell
   std::priority_queue<Candidate> queue_;
   double eps_ = 0, scene_area_ = 0;
 };

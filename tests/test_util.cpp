@@ -1,5 +1,12 @@
 #include "test_util.h"
 
+#include "box_store.h"
+#include "hierarchical.h"
+#include "preprocess.h"
+#include "scene_readers.h"
+
+#include <fmt/format.h>
+
 #include <unistd.h>
 
 #include <array>
@@ -96,6 +103,61 @@ Scene furnace_scene(double rho, double exitance) {
   // Floor to ceiling in a corner: in contact with four walls along their edges.
   add_box(scene, {0.0, 1.0, 0.0}, {0.3, 1.5, 1.0}, false, m, add_object(scene, "corner column"));
   return scene;
+}
+
+void add_table(Scene& scene, double x, double y, int material, const std::string& name) {
+  add_box(scene, {x, y, 0.70}, {x + 0.8, y + 0.6, 0.75}, false, material, add_object(scene, name + " top"));
+  for (int i = 0; i < 4; ++i) {
+    const double lx = x + (i % 2 ? 0.68 : 0.07), ly = y + (i / 2 ? 0.48 : 0.07);
+    add_box(scene, {lx, ly, 0.0}, {lx + 0.05, ly + 0.05, 0.70}, false, material,
+            add_object(scene, fmt::format("{} leg {}", name, i + 1)));
+  }
+}
+
+std::filesystem::path write_obj(const Scene& scene, const std::filesystem::path& stem) {
+  std::string mtl, obj = fmt::format("mtllib {}.mtl\n", stem.filename().string());
+  for (const Material& m : scene.materials)
+    mtl += fmt::format("newmtl {}\nKd {:.17g} {:.17g} {:.17g}\nKe {:.17g} {:.17g} {:.17g}\n", m.name, m.rho[0], m.rho[1],
+                       m.rho[2], m.emission[0], m.emission[1], m.emission[2]);
+  size_t v = 0;
+  int object = -1, material = -1;
+  for (const Polygon& p : scene.polygons) {
+    if (p.object != object) obj += fmt::format("o {}\n", scene.objects[object = p.object].name);
+    if (p.material != material) obj += fmt::format("usemtl {}\n", scene.materials[material = p.material].name);
+    for (const Vec3& x : p.vertices) obj += fmt::format("v {:.17g} {:.17g} {:.17g}\n", x.x, x.y, x.z);
+    obj += "f";
+    for (size_t i = 0; i < p.vertices.size(); ++i) obj += fmt::format(" {}", ++v);
+    obj += "\n";
+  }
+  std::filesystem::path path = stem;
+  path += ".obj";
+  std::filesystem::path mtl_path = stem;
+  mtl_path += ".mtl";
+  write_file(mtl_path, mtl);
+  write_file(path, obj);
+  return path;
+}
+
+StoredSolve solve_stored(const Options& options, const std::function<void(const RadiosityState&)>& after_each) {
+  run_preprocess(options, ShardSpec{});
+  StoredSolve s;
+  std::vector<std::string> warnings;
+  const Scene scene = load_scene(options, warnings);
+  s.mesh = build_mesh(scene, options.mesh.max_patch_area);
+  const BoxStore store(options, s.mesh);
+  s.boxes = store.box_count();
+  const Tracer tracer(s.mesh);
+  s.state = make_state(scene, s.mesh);
+  add_ar_state(store, s.state);
+  first_shot(s.mesh, tracer, s.state, options.first_shot.lines, options.lines.seed, options.solver.threads,
+             emitter_crossings(options, store.face_crossings(s.mesh.face_count())));
+  iterate(options, s.state, s.log, [&](unsigned pass) {
+    PassStats p = hierarchical_iteration(store, s.state, pass, options.solver.threads, line_power(options, store, s.log),
+                                         options.solver.schedule == "v-cycle");
+    if (after_each) after_each(s.state);
+    return p;
+  });
+  return s;
 }
 
 Options test_options(long long global_lines, long long local_lines, double max_patch_area) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "classic.h"
@@ -56,6 +57,26 @@ struct Solved {
   IterationLog log;
 };
 Solved solve_classic_in_memory(const Scene& scene, const Options& options);
+
+// A table of separate objects (top and four legs) standing on the floor z = 0
+// with its top's corner at (x, y); its legs are well inside the top's
+// outline, so the five group into one subscene.
+void add_table(Scene& scene, double x, double y, int material, const std::string& name);
+
+// Writes the scene as OBJ + MTL (`stem`.obj and `stem`.mtl); returns the OBJ path.
+std::filesystem::path write_obj(const Scene& scene, const std::filesystem::path& stem);
+
+// Preprocesses `options` (its scene file and store.dir set) into a store and
+// solves it with the stored-line solver as mpath-solve does; the state after
+// each iteration is checked by `after_each` when given.
+struct StoredSolve {
+  PatchMesh mesh;
+  RadiosityState state;
+  IterationLog log;
+  size_t boxes = 0;
+};
+StoredSolve solve_stored(const Options& options,
+                         const std::function<void(const RadiosityState&)>& after_each = {});
 
 // Options for in-memory solves: given lines, seed 1, 2 threads.
 Options test_options(long long global_lines, long long local_lines, double max_patch_area);

@@ -1,0 +1,349 @@
+// The hierarchy of subscenes: grouping, virtual walls and their ARs,
+// transmittances from a box's own lines, and the hierarchical solver against
+// exact answers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "box_store.h"
+#include "hierarchy.h"
+#include "line_tracing.h"
+#include "sampling.h"
+#include "scene_readers.h"
+#include "test_util.h"
+
+namespace mpath {
+namespace {
+
+using test::TempDir;
+
+// A box of the given bounds as the hierarchy would make it, with a fixed VP grid.
+SceneBox make_box(const Bounds& bounds, int grid) {
+  SceneBox b;
+  b.bounds = bounds;
+  for (int f = 0; f < 6; ++f) {
+    b.grid[f] = grid;
+    b.ar_offset[f + 1] = b.ar_offset[f] + static_cast<uint32_t>(grid * grid * kArsPerVp);
+  }
+  return b;
+}
+
+TEST(Ars, UniformLinesFallInEveryArOfAVpEquallyOften) {
+  const SceneBox box = make_box({{0, 0, 0}, {1.0, 2.0, 0.5}}, 2);
+  const BoxLineSampler sampler(box.bounds);
+  Rng rng = make_rng(7, 0, 0);
+  std::vector<uint64_t> count(box.ar_count(), 0);
+  const int lines = 2'000'000;
+  for (int i = 0; i < lines; ++i) {
+    const GlobalLine l = sampler.sample(rng);
+    BoxCrossing c;
+    if (!cross_box(box.bounds, l.org, l.dir, c)) continue;
+    ++count[box.ar_at(c.face_in, l.org + l.dir * c.t_in, l.dir)];
+    ++count[box.ar_at(c.face_out, l.org + l.dir * c.t_out, l.dir)];
+  }
+  // Within a VP, each of the 24 ARs has probability 1/24: binomial noise, 5 sigma.
+  for (uint32_t vp = 0; vp < box.ar_count() / kArsPerVp; ++vp) {
+    uint64_t n = 0;
+    for (int a = 0; a < kArsPerVp; ++a) n += count[vp * kArsPerVp + a];
+    ASSERT_GT(n, 10000u);
+    const double expected = n / 24.0, sigma = std::sqrt(n * (1.0 / 24) * (23.0 / 24));
+    for (int a = 0; a < kArsPerVp; ++a)
+      EXPECT_NEAR(static_cast<double>(count[vp * kArsPerVp + a]), expected, 5 * sigma) << "VP " << vp << " AR " << a;
+  }
+  // And a face's VPs get lines in proportion to the face's area (all VPs of one face equal).
+  uint64_t x_face = 0, z_face = 0;
+  for (uint32_t a = box.ar_offset[0]; a < box.ar_offset[1]; ++a) x_face += count[a];
+  for (uint32_t a = box.ar_offset[4]; a < box.ar_offset[5]; ++a) z_face += count[a];
+  EXPECT_NEAR(double(x_face) / double(z_face), (2.0 * 0.5) / (1.0 * 2.0), 0.01);
+}
+
+TEST(Ars, ALineGetsTheSameArWhicheverWayItRuns) {
+  const SceneBox box = make_box({{-1, -1, -1}, {1, 1, 1}}, 4);
+  Rng rng = make_rng(3, 0, 0);
+  for (int i = 0; i < 10000; ++i) {
+    const Vec3 d = normalize(Vec3{uniform(rng) - 0.5, uniform(rng) - 0.5, uniform(rng) - 0.5});
+    const int face = static_cast<int>(uniform(rng) * 6);
+    Vec3 p{uniform(rng) * 2 - 1, uniform(rng) * 2 - 1, uniform(rng) * 2 - 1};
+    p[face / 2] = face % 2 ? 1 : -1;
+    ASSERT_EQ(box.ar_at(face, p, d), box.ar_at(face, p, -d));
+    const auto place = box.place(box.ar_at(face, p, d));
+    EXPECT_EQ(place.face, face);
+    EXPECT_EQ(box.ar_of(place), box.ar_at(face, p, d));
+  }
+}
+
+// A room of separate walls, two tables far apart and a poster on a wall.
+Scene furnished_room(double rho, double radiance) {
+  Scene scene;
+  scene.file = "room";
+  const int m = test::add_material(scene, "grey", rho, radiance);
+  const double w = 6, d = 4, h = 2.5;
+  test::add_quad(scene, {0, 0, 0}, {w, 0, 0}, {w, d, 0}, {0, d, 0}, m, test::add_object(scene, "floor"));
+  test::add_quad(scene, {0, 0, h}, {0, d, h}, {w, d, h}, {w, 0, h}, m, test::add_object(scene, "ceiling"));
+  test::add_quad(scene, {0, 0, 0}, {0, d, 0}, {0, d, h}, {0, 0, h}, m, test::add_object(scene, "west"));
+  test::add_quad(scene, {w, 0, 0}, {w, 0, h}, {w, d, h}, {w, d, 0}, m, test::add_object(scene, "east"));
+  test::add_quad(scene, {0, 0, 0}, {0, 0, h}, {w, 0, h}, {w, 0, 0}, m, test::add_object(scene, "south"));
+  test::add_quad(scene, {0, d, 0}, {w, d, 0}, {w, d, h}, {0, d, h}, m, test::add_object(scene, "north"));
+  test::add_table(scene, 0.8, 0.8, m, "table A");
+  test::add_table(scene, 4.2, 2.4, m, "table B");
+  // A poster on the north wall, a hair in front of it.
+  test::add_quad(scene, {2.5, d - 1e-3, 1.0}, {3.5, d - 1e-3, 1.0}, {3.5, d - 1e-3, 1.8}, {2.5, d - 1e-3, 1.8}, m,
+                 test::add_object(scene, "poster"));
+  return scene;
+}
+
+TEST(Hierarchy, TwoFarApartTablesBuildTwoSubscenesAndALonePolygonNone) {
+  const PatchMesh mesh = build_mesh(furnished_room(0.5, 0), 0.05);
+  const Hierarchy h = build_hierarchy(mesh, Options::Hierarchy{}, false);
+  ASSERT_EQ(h.boxes.size(), 3u) << describe_hierarchy(h, {});
+  EXPECT_EQ(h.boxes[0].children.size(), 2u);
+  EXPECT_EQ(h.boxes[0].objects.size(), 7u);  // six walls and the poster
+  for (int b : h.boxes[0].children) {
+    const SceneBox& box = h.boxes[b];
+    EXPECT_EQ(box.objects.size(), 5u);  // a top and four legs
+    EXPECT_EQ(box.depth, 1);
+    EXPECT_NEAR(box.bounds.hi.z, 0.75, 1e-12);
+    EXPECT_NEAR(box.bounds.size().x, 0.8, 1e-12);
+    // The first pair grouped: the top and a leg, (1.1 + 0.145) / 3.06 m2 of box
+    // surface; the other legs lie inside their box and join it.
+    EXPECT_NEAR(box.quotient, (1.1 + 0.145) / 3.06, 1e-9);
+  }
+  // No patch outside a box (and its children) meets the box's interior.
+  for (size_t b = 1; b < h.boxes.size(); ++b)
+    for (size_t p = 0; p < mesh.patches.size(); ++p) {
+      if (h.patch_box[p] == static_cast<int>(b)) continue;
+      const Patch& patch = mesh.patches[p];
+      EXPECT_FALSE(triangle_meets_box(mesh.vertices[patch.v[0]], mesh.vertices[patch.v[1]], mesh.vertices[patch.v[2]],
+                                      h.boxes[b].bounds))
+          << "patch " << p << " in box " << b;
+    }
+  // Flat (or max_depth 0): the root alone.
+  EXPECT_EQ(build_hierarchy(mesh, Options::Hierarchy{}, true).boxes.size(), 1u);
+  Options::Hierarchy shallow;
+  shallow.max_depth = 0;
+  EXPECT_EQ(build_hierarchy(mesh, shallow, false).boxes.size(), 1u);
+}
+
+TEST(Hierarchy, ARoomWithALonePanelGetsNoSubscene) {
+  // A lone quad and a room: grouping never pays.
+  Scene scene;
+  const int m = test::add_material(scene, "grey", 0.5, 0);
+  test::add_box(scene, {0, 0, 0}, {3, 3, 3}, true, m, test::add_object(scene, "room"));
+  test::add_quad(scene, {1, 1, 1}, {2, 1, 1}, {2, 2, 1}, {1, 2, 1}, m, test::add_object(scene, "panel"));
+  const PatchMesh mesh = build_mesh(scene, 0.1);
+  EXPECT_EQ(build_hierarchy(mesh, Options::Hierarchy{}, false).boxes.size(), 1u);
+}
+
+// Transmittances of a box from its own lines, traced as mpath-preprocess does.
+std::vector<double> traced_transmittance(const PatchMesh& mesh, const Bounds& bounds, int grid, uint64_t lines,
+                                         SceneBox& box) {
+  Hierarchy h;
+  h.boxes.resize(2);
+  h.boxes[0].bounds = mesh.bounds;
+  h.boxes[0].children = {1};
+  h.boxes[1] = make_box(bounds, grid);
+  h.boxes[1].parent = 0;
+  h.boxes[1].depth = 1;
+  for (uint32_t p = 0; p < mesh.patches.size(); ++p) h.boxes[1].patches.push_back(p);
+  h.patch_box.assign(mesh.patches.size(), 1);
+  Options o;
+  o.lines.sequence = "random";
+  o.store.chunk_lines = 65536;
+  const ChunkTracer tracer(o, mesh, h, 1, lines);
+  BoxTally tally = tracer.empty_tally();
+  std::vector<linestore::LineRecord> records;
+  for (uint64_t c = 0; c < tracer.chunk_count(); ++c) tracer.trace(c, records, tally);
+  box = h.boxes[1];
+  return transmittances(box, tally.counts.wall_lines, tally.counts.wall_open);
+}
+
+TEST(Transmittance, OfAnEmptyBoxIsOneInEveryAr) {
+  Scene scene;
+  const int m = test::add_material(scene, "grey", 0.5, 0);
+  // Something far away gives the mesh its bounds; the box holds nothing.
+  test::add_quad(scene, {5, 5, 5}, {6, 5, 5}, {6, 6, 5}, {5, 6, 5}, m, test::add_object(scene, "far"));
+  const PatchMesh all = build_mesh(scene, 1.0);
+  PatchMesh mesh = all;
+  mesh.bounds = Bounds{{-2, -2, -2}, {7, 7, 7}};
+  SceneBox box;
+  Hierarchy h;
+  h.boxes.resize(2);
+  h.boxes[0].bounds = mesh.bounds;
+  h.boxes[0].children = {1};
+  h.boxes[0].patches = {0};
+  h.boxes[1] = make_box({{-1, -1, -1}, {1, 1, 1}}, 2);
+  h.boxes[1].parent = 0;
+  h.patch_box.assign(mesh.patches.size(), 0);
+  Options o;
+  const ChunkTracer tracer(o, mesh, h, 1, 100000);
+  BoxTally tally = tracer.empty_tally();
+  std::vector<linestore::LineRecord> records;
+  for (uint64_t c = 0; c < tracer.chunk_count(); ++c) tracer.trace(c, records, tally);
+  const auto t = transmittances(h.boxes[1], tally.counts.wall_lines, tally.counts.wall_open);
+  for (double v : t) ASSERT_EQ(v, 1.0);
+  for (uint32_t n : tally.counts.wall_lines) EXPECT_GT(n, 0u);
+}
+
+// Area of the convex polygon `poly` (in a plane's 2D coordinates) clipped to
+// the rectangle [0, w] x [0, h] (Sutherland-Hodgman).
+double clipped_area(std::vector<std::array<double, 2>> poly, double w, double h) {
+  auto clip = [&](int axis, double bound, bool keep_below) {
+    std::vector<std::array<double, 2>> out;
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const auto& a = poly[i];
+      const auto& b = poly[(i + 1) % poly.size()];
+      const bool ina = keep_below ? a[axis] <= bound : a[axis] >= bound;
+      const bool inb = keep_below ? b[axis] <= bound : b[axis] >= bound;
+      if (ina) out.push_back(a);
+      if (ina != inb) {
+        const double t = (bound - a[axis]) / (b[axis] - a[axis]);
+        out.push_back({a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])});
+      }
+    }
+    poly = out;
+  };
+  clip(0, 0, false);
+  clip(0, w, true);
+  clip(1, 0, false);
+  clip(1, h, true);
+  double area = 0;
+  for (size_t i = 0; i < poly.size(); ++i) {
+    const auto& a = poly[i];
+    const auto& b = poly[(i + 1) % poly.size()];
+    area += a[0] * b[1] - b[0] * a[1];
+  }
+  return std::fabs(area) / 2;
+}
+
+// Convex hull (monotone chain) of 2D points.
+std::vector<std::array<double, 2>> hull(std::vector<std::array<double, 2>> p) {
+  std::sort(p.begin(), p.end());
+  std::vector<std::array<double, 2>> h(2 * p.size());
+  size_t k = 0;
+  auto cross2 = [](const auto& o, const auto& a, const auto& b) {
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+  };
+  for (size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross2(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross2(h[k - 2], h[k - 1], p[i - 1]) <= 0) --k;
+    h[k++] = p[i - 1];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+TEST(Transmittance, OfABoxAroundACentredCubeIsTheAnalyticUnblockedFraction) {
+  // Cube of side 1 at the centre of a box of side 4 (one VP per face).
+  Scene scene;
+  const int m = test::add_material(scene, "grey", 0.5, 0);
+  test::add_box(scene, {-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}, false, m, test::add_object(scene, "cube"));
+  PatchMesh mesh = build_mesh(scene, 10.0);
+  const Bounds bounds{{-2, -2, -2}, {2, 2, 2}};
+  mesh.bounds = bounds;
+  SceneBox box;
+  const uint64_t lines = 3'000'000;
+  const auto t = traced_transmittance(mesh, bounds, 1, lines, box);
+
+  // Independently: lines entering face z = -2 with direction d are blocked
+  // when their entry point lies in the cube's shadow cast along d onto that
+  // face; an AR's value is the mean over its directions (uniform in cos^2
+  // theta and phi for uniform lines). Both ends of a line count in n_R: a
+  // line leaving through the face along -d was blocked the same way.
+  const double band_cos2[4] = {1.0, 2.0 / 3.0, 1.0 / 3.0, 0.0};
+  SceneBox::ArPlace place{4, 0, 0, 0, 0};  // face z low
+  int checked = 0;
+  for (int sector = 0; sector < kSectors; ++sector)
+    for (int band = 0; band < kBands; ++band) {
+      place.sector = sector;
+      place.band = band;
+      const uint32_t ar = box.ar_of(place);
+      const int q = 24;
+      double blocked = 0;
+      for (int i = 0; i < q; ++i)
+        for (int j = 0; j < q; ++j) {
+          const double c2 = band_cos2[band + 1] + (band_cos2[band] - band_cos2[band + 1]) * (i + 0.5) / q;
+          const double phi = -std::numbers::pi + 2 * std::numbers::pi * (sector + (j + 0.5) / q) / kSectors;
+          const double c = std::sqrt(c2), s = std::sqrt(1 - c2);
+          // Face z low: its outward normal is -z; the AR's direction turned
+          // outwards is (s cos phi, s sin phi, -c) in (u = x, v = y, -z).
+          // The inward direction of travel is its negative.
+          const Vec3 dir{-s * std::cos(phi), -s * std::sin(phi), c};
+          std::vector<std::array<double, 2>> shadow;
+          for (int k = 0; k < 8; ++k) {
+            const Vec3 v{k & 1 ? 0.5 : -0.5, k & 2 ? 0.5 : -0.5, k & 4 ? 0.5 : -0.5};
+            const double back = (v.z + 2) / dir.z;  // back along dir to z = -2
+            shadow.push_back({v.x - back * dir.x + 2, v.y - back * dir.y + 2});
+          }
+          blocked += clipped_area(hull(shadow), 4, 4) / 16;
+        }
+      const double expected = 1 - blocked / (q * q);
+      // n_R crossings of this AR: binomial noise of the estimate, 5 sigma, plus quadrature error.
+      const double n = std::max(1.0, lines * 2.0 / box.ar_count());
+      const double sigma = std::sqrt(std::max(expected * (1 - expected), 1e-4) / n);
+      EXPECT_NEAR(t[ar], expected, 5 * sigma + 2e-3) << "sector " << sector << " band " << band;
+      ++checked;
+    }
+  EXPECT_EQ(checked, 24);
+}
+
+TEST(Transmittance, ArsNoLineCrossedTakeTheirNeighbours) {
+  const SceneBox box = make_box({{0, 0, 0}, {1, 1, 1}}, 2);
+  std::vector<uint32_t> lines(box.ar_count(), 10), open(box.ar_count(), 5);
+  SceneBox::ArPlace p{2, 1, 0, 3, 1};
+  const uint32_t hole = box.ar_of(p);
+  lines[hole] = open[hole] = 0;
+  SceneBox::ArPlace n = p;
+  n.sector = 4;  // a neighbouring direction over the same VP is clear
+  open[box.ar_of(n)] = 10;
+  const auto t = transmittances(box, lines, open);
+  EXPECT_EQ(t[box.ar_of(n)], 1.0);
+  EXPECT_GT(t[hole], 0.5);
+  EXPECT_LT(t[hole], 1.0);
+  EXPECT_EQ(t[0], 0.5);
+  // Redirects: an AR that cannot carry power hands it to the nearest one that can.
+  std::vector<bool> valid(box.ar_count(), false);
+  SceneBox::ArPlace v = p;
+  v.column = 0;
+  valid[box.ar_of(v)] = true;
+  const auto target = redirect_targets(box, valid);
+  EXPECT_EQ(target[hole], box.ar_of(v));
+  EXPECT_EQ(target[box.ar_of(v)], box.ar_of(v));
+  EXPECT_EQ(redirect_targets(box, std::vector<bool>(box.ar_count(), false))[hole], kNoTarget);
+}
+
+TEST(HierarchicalSolve, FurnaceWithSubscenesGivesExactRadiosityAndEnergyClosesEveryIteration) {
+  // Every surface emits exitance E and reflects rho: B = E / (1 - rho) exactly.
+  const double rho = 0.5, exitance = 1.0;
+  TempDir dir;
+  Options o = test::test_options(2'000'000, 500'000, 0.02);
+  o.scene.file = test::write_obj(furnished_room(rho, exitance / std::numbers::pi), dir / "room");
+  o.store.dir = dir / "store";
+  o.solver.method = "hierarchical";
+  o.solver.iterations = 30;
+  o.solver.tolerance = 1e-4;
+  double worst_residual = 0;
+  const auto s = test::solve_stored(o, [&](const RadiosityState& st) {
+    worst_residual = std::max(worst_residual, std::fabs(st.energy_residual()) / st.emitted_total());
+  });
+  ASSERT_EQ(s.boxes, 3u);
+  EXPECT_TRUE(s.log.converged);
+  EXPECT_LT(worst_residual, 1e-11);
+  const double exact = exitance / (1 - rho);
+  double area = 0, weighted = 0, sq = 0;
+  for (size_t f = 0; f < s.mesh.face_count(); ++f) {
+    const double a = s.mesh.face_area(static_cast<int>(f));
+    const double b = s.state.radiosity(s.mesh, f)[0];
+    area += a;
+    weighted += a * b;
+    sq += a * (b - exact) * (b - exact);
+  }
+  EXPECT_NEAR(weighted / area, exact, 0.01 * exact);           // mean within 1 %
+  EXPECT_LT(std::sqrt(sq / area) / exact, 0.05);               // per face: noise of 0.02 m2 patches
+}
+
+}  // namespace
+}  // namespace mpath
