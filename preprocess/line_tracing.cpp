@@ -60,8 +60,11 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
   Rng rng = make_rng(seed_, kStoreLineStream, (static_cast<unsigned long long>(box_index_) << 40) + chunk);
   const uint64_t first = first_line(chunk), n = lines_in(chunk);
   const bool root = box_index_ == 0;
-  out.resize(n);
-  std::vector<LineHit> hits;
+  // Records are built in a per-thread scratch whose event lists keep their
+  // memory from chunk to chunk, then swapped into `out` in their stored order.
+  thread_local std::vector<linestore::LineRecord> scratch;
+  thread_local std::vector<LineHit> hits;
+  scratch.resize(n);
   struct ChildCrossing {
     double t_in, t_out;
     Event event;
@@ -72,8 +75,9 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
     double u[4];
     sequence_.point(first + i, rng, u);
     const GlobalLine line = sampler_.sample(u);
-    linestore::LineRecord& record = out[i];
-    record = {};
+    linestore::LineRecord& record = scratch[i];
+    record.entry_ar = record.exit_ar = linestore::kNoAr;
+    record.events.clear();
     BoxCrossing wall{};
     if (!root) {
       // A subscene's line: its ends are where it crosses the box's walls.
@@ -105,7 +109,7 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
     for (const LineHit& h : hits) {
       while (next_child < children.size() && h.t > 0.5 * (children[next_child].t_in + children[next_child].t_out))
         record.events.push_back(children[next_child++].event);
-      const uint32_t local = local_patch(h.patch);
+      const uint32_t local = h.traced >= 0 ? static_cast<uint32_t>(h.traced) : local_patch(h.patch);
       record.events.push_back({Event::patch, local, h.along});
       counts.patch_crossings[local]++;
     }
@@ -128,11 +132,15 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
   // Lines in order of their first and last crossings: neighbouring records
   // start alike, which the delta coding and zstd turn into fewer bytes. Any
   // order of lines is a valid Multipath pass; this one is fixed by the content.
-  auto key = [](const linestore::LineRecord& r) {
-    if (r.events.empty()) return std::make_pair(uint64_t{0}, uint64_t{0});
-    return std::make_pair(uint64_t{r.events.front().id} + 1, uint64_t{r.events.back().id});
-  };
-  std::stable_sort(out.begin(), out.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
+  thread_local std::vector<std::pair<uint64_t, uint32_t>> keys;  // (first + 1) << 32 | last, line
+  keys.resize(n);
+  for (uint64_t i = 0; i < n; ++i) {
+    const auto& e = scratch[i].events;
+    keys[i] = {e.empty() ? 0 : ((uint64_t{e.front().id} + 1) << 32) | e.back().id, static_cast<uint32_t>(i)};
+  }
+  std::sort(keys.begin(), keys.end());  // ties by line index: a stable order
+  out.resize(n);
+  for (uint64_t i = 0; i < n; ++i) std::swap(out[i], scratch[keys[i].second]);
 }
 
 }  // namespace mpath

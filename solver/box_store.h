@@ -8,6 +8,8 @@
 
 #include <filesystem>
 #include <memory>
+
+#include <tbb/enumerable_thread_specific.h>
 #include <vector>
 
 #include "box_file.h"
@@ -25,6 +27,10 @@ struct StoreBox {
   std::vector<std::array<int, 2>> local_faces;
   std::vector<int> face_global;
   std::vector<double> face_crossings;  // per local face
+  // Per local face: itself when the box's lines cross it; else the nearest
+  // crossed face of the same polygon facing the same way, which sends its
+  // power for it (-1: none; the power stays unshot).
+  std::vector<int> face_proxy;
   linestore::BoxCounts counts;         // summed over the box's files
   std::vector<double> transmittance;   // per wall AR: n_R^d / n_R, interpolated where n_R = 0
   // Per wall AR, the AR whose power it hands on when no line can carry its
@@ -38,7 +44,8 @@ struct StoreBox {
   std::vector<uint64_t> chunk_lines;  // lines in each
   uint64_t lines = 0, events = 0, bytes = 0;
   // The least share of its lines a pass takes: enough for its median face to
-  // be crossed 16 times and its walls' ARs 4 times on average.
+  // be crossed 16 times and its walls' ARs 4 times on average; at least 1/4
+  // for a subscene.
   double coverage = 1;
 };
 
@@ -59,12 +66,9 @@ class BoxStore {
   // Per mesh face: crossings by the lines of the box it belongs to.
   std::vector<double> face_crossings(size_t faces) const;
 
-  // Per-thread readers, opened lazily.
-  struct Cursor {
-    std::vector<std::unique_ptr<linestore::BoxFileReader>> readers;
-  };
-  Cursor cursor() const { return Cursor{std::vector<std::unique_ptr<linestore::BoxFileReader>>(files_.size())}; }
-  void read(int box, uint64_t chunk, Cursor& cursor, linestore::DecodedChunk& out) const;
+  // Reads a chunk with the calling thread's readers, which stay open from
+  // pass to pass (a thread runs one chunk at a time).
+  void read(int box, uint64_t chunk, linestore::DecodedChunk& out) const;
   uint64_t chunk_lines(int box, uint64_t chunk) const { return boxes_[box].chunk_lines[chunk]; }
 
  private:
@@ -72,6 +76,8 @@ class BoxStore {
   Hierarchy hierarchy_;
   std::vector<StoreBox> boxes_;
   std::vector<std::filesystem::path> files_;
+  using Readers = std::vector<std::unique_ptr<linestore::BoxFileReader>>;
+  mutable tbb::enumerable_thread_specific<Readers> readers_;
   size_t ar_total_ = 0;
 };
 

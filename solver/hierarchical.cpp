@@ -154,6 +154,15 @@ BoxInputs start_box(const BoxStore& store, int b, RadiosityState& state, double 
   // (all of them when the pass takes every line).
   auto share = [&](double crossings) { return crossings > 0 ? 1.0 / (crossings * in.fraction) : 0.0; };
   for (size_t f = 0; f < in.faces.size(); ++f) in.faces[f].share = share(box.face_crossings[f]);
+  // A face no line crosses hands its quota to its proxy.
+  for (size_t f = 0; f < in.faces.size(); ++f) {
+    const int p = box.face_proxy[f];
+    if (p < 0 || p == static_cast<int>(f)) continue;
+    for (int c = 0; c < ch; ++c) {
+      in.faces[p].quota[c] += in.faces[f].quota[c];
+      in.faces[f].quota[c] = 0;
+    }
+  }
   if (b > 0)
     for (uint32_t r = 0; r < in.wall_ars; ++r)
       in.wall[r].share = share(double(box.counts.wall_lines[r]) - double(box.counts.wall_open[r]));
@@ -323,11 +332,10 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
     uint64_t shard_lines = 0;
     for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) shard_lines += in.parts[i].lines;
     const double allowance = every_line || pass_lines == 0 ? 1.0 : double(shard_lines) / double(pass_lines);
-    BoxStore::Cursor cursor = store.cursor();
     linestore::DecodedChunk chunk;
     for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) {
       const uint64_t c = in.parts[i].chunk;
-      store.read(b, c, cursor, chunk);
+      store.read(b, c, chunk);
       if (!chunk_fits(in, chunk))
         throw InputError(fmt::format("store: box {} chunk {} names patches, boxes or ARs the box does not have "
                                      "(damaged or foreign store); run mpath-preprocess again", b, c));
@@ -397,6 +405,36 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
 }
 
 }  // namespace
+
+Remaining remaining_power(const BoxStore& store, const RadiosityState& state) {
+  Remaining r;
+  const int ch = state.channels;
+  for (size_t b = 0; b < store.box_count(); ++b) {
+    const StoreBox& box = store.box(static_cast<int>(b));
+    double here = 0;
+    for (size_t f = 0; f < box.face_global.size(); ++f)
+      for (int c = 0; c < ch; ++c) {
+        const double u = state.unshot[state.at(static_cast<size_t>(box.face_global[f]), c)];
+        r.unshot += u;
+        here += u;
+        if (box.face_proxy[f] < 0) r.stuck_faces += u;
+      }
+    for (size_t a = 0; a < box.in_target.size(); ++a)
+      for (int c = 0; c < ch; ++c) {
+        const double in = state.ar_in[(box.ar_base + a) * ch + c], out = state.ar_out[(box.ar_base + a) * ch + c];
+        r.in += in;
+        r.out += out;
+        here += in + out;
+        if (box.in_target[a] == kNoTarget) r.stuck_in += in;
+        if (box.out_target[a] == kNoTarget) r.stuck_out += out;
+      }
+    if (here > r.deepest_power) {
+      r.deepest_power = here;
+      r.deepest_box = static_cast<int>(b);
+    }
+  }
+  return r;
+}
 
 double line_power(const Options& options, const BoxStore& store, const IterationLog& log) {
   if (!options.solver.adaptive_lines || log.passes.empty() || log.first_unshot <= 0 || store.lines() == 0) return 0.0;

@@ -33,6 +33,17 @@ struct BoxPassStats {
 // Multipath casts fewer lines in later passes (docs/algorithm.md).
 double line_power(const Options& options, const BoxStore& store, const IterationLog& log);
 
+// Where the power still to distribute is (W, summed over channels), and how
+// much of it no stored line can carry (faces without a crossed proxy, ARs
+// without a target): that part stays whatever the iterations do.
+struct Remaining {
+  double unshot = 0, in = 0, out = 0;
+  double stuck_faces = 0, stuck_in = 0, stuck_out = 0;
+  int deepest_box = 0;       // the box holding the most
+  double deepest_power = 0;
+};
+Remaining remaining_power(const BoxStore& store, const RadiosityState& state);
+
 // A pass takes the n lines of a chunk in the order 0, s, 2s, ... (mod n):
 // the step s, near n times the golden ratio and coprime to n, puts lines far
 // apart in the chunk (which is sorted by what they meet) next to each other.

@@ -150,6 +150,14 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   const double relative_residual = state.energy_residual() / state.emitted_total();
   spdlog::info("energy: unshot {:.3e} and held in ARs {:.3e} of emitted, balance residual {:.2e} (relative)",
                state.unshot_total() / state.emitted_total(), state.held_total() / state.emitted_total(), relative_residual);
+  if (store) {
+    const Remaining r = remaining_power(*store, state);
+    const double e = state.emitted_total();
+    spdlog::info("left to distribute: unshot {:.2e}, entering boxes {:.2e}, leaving boxes {:.2e} of emitted; most in box {} "
+                 "({:.2e}); no stored line can carry {:.2e} (faces {:.2e}, ARs {:.2e})",
+                 r.unshot / e, r.in / e, r.out / e, r.deepest_box, r.deepest_power / e,
+                 (r.stuck_faces + r.stuck_in + r.stuck_out) / e, r.stuck_faces / e, (r.stuck_in + r.stuck_out) / e);
+  }
   if (!iterations.converged)
     spdlog::warn("stopped at solver.iterations = {} with unshot + held {:.3e} of emitted above solver.tolerance {}",
                  options.solver.iterations, state.remaining_fraction(), options.solver.tolerance);

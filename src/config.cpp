@@ -172,6 +172,7 @@ const std::map<std::string, Setter>& setters() {
       {"hierarchy.max_depth", [](auto& n, auto& s, Options& o) { o.hierarchy.max_depth = static_cast<int>(in_range(get_integer(n, s), 0, 64, s)); }},
       {"lines.total", [](auto& n, auto& s, Options& o) { o.lines.total = positive(get_integer(n, s), s); }},
       {"lines.root_fraction", [](auto& n, auto& s, Options& o) { o.lines.root_fraction = in_range(get_number(n, s), 0.0, 1.0, s); }},
+      {"lines.min_density", [](auto& n, auto& s, Options& o) { o.lines.min_density = in_range(get_number(n, s), 0.0, 1e6, s); }},
       {"lines.box_budget",
        [](auto& n, auto& s, Options& o) {
          o.lines.box_budget = get_string(n, s);
@@ -318,6 +319,7 @@ toml::table options_table(const Options& o) {
       {"lines", toml::table{{"total", static_cast<int64_t>(o.lines.total)},
                             {"root_fraction", o.lines.root_fraction},
                             {"box_budget", o.lines.box_budget},
+                            {"min_density", o.lines.min_density},
                             {"seed", static_cast<int64_t>(o.lines.seed)},
                             {"sequence", o.lines.sequence}}},
       {"first_shot", toml::table{{"lines", static_cast<int64_t>(o.first_shot.lines)},

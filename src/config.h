@@ -45,7 +45,7 @@ struct Options {
     double group_threshold = 0.4;  // docs/algorithm.md: a table and its legs group at about 0.4
     double vp_area_ratio = 16.0;
     int vp_grid = 0;  // 0: derived from vp_area_ratio
-    int max_depth = 8;
+    int max_depth = 1;  // docs/algorithm.md: one level measured best
   } hierarchy;
 
   struct Lines {
@@ -54,13 +54,16 @@ struct Options {
     // How the subscenes share the rest: "quotient" (their grouping quotient)
     // or "objects" (their object count), paper 3.3.1.
     std::string box_budget = "quotient";
+    // No subscene gets fewer lines per unit of box surface than this times
+    // the root's (docs/algorithm.md).
+    double min_density = 1.0;
     unsigned long long seed = 1;
     std::string sequence = "halton";  // "random" or "halton" (docs/algorithm.md)
   } lines;
 
   struct FirstShot {
     long long lines = 1'000'000;
-    bool accelerate = true;
+    bool accelerate = false;
     // "auto": an emitter face that the first pass of global lines crosses more
     // often than it would get local lines is shot by the global lines;
     // "local": every emitter face is shot with local lines.

@@ -1,5 +1,7 @@
 #include "hierarchy.h"
 
+#include "sampling.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -25,6 +27,12 @@ constexpr double kAbsorbGrowth = 1.5;
 // this share of the scene box's surface (a room's shell grouped with what it
 // holds) is not formed.
 constexpr double kMaxSceneShare = 0.5;
+// A subscene holds at least this many polygons (two books on a shelf do not
+// pay for the walls, ARs and lines of a box of their own)...
+constexpr size_t kMinPolygons = 24;
+// ...and has at most this share of the surface of the box it is in (a box
+// nearly as large as its parent adds a level and nothing else).
+constexpr double kMaxNesting = 0.5;
 
 Bounds merged(const Bounds& a, const Bounds& b) {
   Bounds m = a;
@@ -64,9 +72,13 @@ uint32_t SceneBox::ar_at(int face, const Vec3& point, const Vec3& dir) const {
   const double s = dir[axis] * outward >= 0 ? 1.0 : -1.0;
   const double c = std::fabs(dir[axis]) / std::max(length(dir), 1e-300);
   const int band = c > kBand0 ? 0 : (c > kBand1 ? 1 : 2);
-  const double phi = std::atan2(s * dir[v], s * dir[u]);  // (-pi, pi]
-  int sector = static_cast<int>(std::floor((phi + std::numbers::pi) / (2 * std::numbers::pi) * kSectors));
-  sector = std::clamp(sector, 0, kSectors - 1);
+  // Sector k holds azimuths phi = atan2(y, x) in [-pi + k pi/4, -pi + (k+1) pi/4),
+  // found by comparisons instead of atan2.
+  const double x = s * dir[u], y = s * dir[v];
+  const double ax = std::fabs(x), ay = std::fabs(y);
+  int sector;
+  if (y < 0) sector = x < 0 ? (ay < ax ? 0 : 1) : (ay > ax ? 2 : 3);
+  else sector = x > 0 ? (y < x ? 4 : 5) : (y > ax ? 6 : 7);
   return ar_offset[face] + static_cast<uint32_t>(((row * n + column) * kSectors + sector) * kBands + band);
 }
 
@@ -184,6 +196,12 @@ class Builder {
     for (const Patch& p : mesh.patches) objects = std::max(objects, p.object + 1);
     object_patches_.resize(objects);
     for (size_t p = 0; p < mesh.patches.size(); ++p) object_patches_[mesh.patches[p].object].push_back(static_cast<uint32_t>(p));
+    object_polygons_.resize(objects);
+    for (int o = 0; o < objects; ++o) {
+      std::set<int> polygons;
+      for (uint32_t p : object_patches_[o]) polygons.insert(mesh.patches[p].polygon);
+      object_polygons_[o] = polygons.size();
+    }
     eps_ = 1e-6 * std::max(mesh.bounds.diagonal(), 1e-30);
     scene_area_ = mesh.bounds.surface_area();
     for (int o = 0; o < objects; ++o) {
@@ -242,7 +260,7 @@ class Builder {
     root.objects = shell_;
     for (size_t i = 0; i < items_.size(); ++i)
       if (items_[i].alive) top.push_back(static_cast<int>(i));
-    place(h, 0, top);
+    place(h, 0, top, scene_area_);
     // Deeper than max_depth: dissolved into the ancestor at max_depth.
     for (size_t b = 0; b < h.boxes.size(); ++b) finish_box(h, static_cast<int>(b));
     // Boxes listed by depth, then index (children run after their parents).
@@ -344,16 +362,27 @@ class Builder {
       if (items_[i].alive) push_pair(i, id);
   }
 
-  // Puts `items` into box `box`: objects directly, groups as child boxes.
-  void place(Hierarchy& h, int box, const std::vector<int>& items) {
+  size_t item_polygons(int item) const {
+    if (items_[item].object >= 0) return object_polygons_[items_[item].object];
+    size_t n = 0;
+    for (int m : items_[item].members) n += item_polygons(m);
+    return n;
+  }
+
+  // Puts `items` into box `box` (of surface area `area`): objects directly,
+  // groups as child boxes, except groups that would not pay as subscenes,
+  // whose contents go into `box` instead: deeper than max_depth, holding
+  // fewer than kMinPolygons polygons, or nearly as large as `box`.
+  void place(Hierarchy& h, int box, const std::vector<int>& items, double area) {
     for (int i : items) {
       const Item& it = items_[i];
       if (it.object >= 0) {
         h.boxes[box].objects.push_back(it.object);
         continue;
       }
-      if (h.boxes[box].depth + 1 > options_.max_depth) {
-        place(h, box, it.members);  // too deep: its contents stay in this box
+      if (h.boxes[box].depth + 1 > options_.max_depth || item_polygons(i) < kMinPolygons ||
+          it.area > kMaxNesting * area) {
+        place(h, box, it.members, area);
         continue;
       }
       const int child = static_cast<int>(h.boxes.size());
@@ -362,7 +391,7 @@ class Builder {
       h.boxes[child].depth = h.boxes[box].depth + 1;
       h.boxes[child].quotient = it.quotient;
       h.boxes[box].children.push_back(child);
-      place(h, child, it.members);
+      place(h, child, it.members, it.area);
     }
   }
 
@@ -423,6 +452,7 @@ class Builder {
   const PatchMesh& mesh_;
   Options::Hierarchy options_;
   std::vector<std::vector<uint32_t>> object_patches_;
+  std::vector<size_t> object_polygons_;
   std::vector<Item> items_;
   std::vector<int> shell_;  // objects of the scene's shell
   std::priority_queue<Candidate> queue_;
@@ -464,21 +494,34 @@ std::string describe_hierarchy(const Hierarchy& h, const std::vector<uint64_t>& 
 namespace mpath {
 
 std::vector<uint64_t> box_line_budget(const Hierarchy& h, const Options::Lines& lines) {
-  const uint64_t total = static_cast<uint64_t>(lines.total);
+  const double total = static_cast<double>(lines.total);
   std::vector<uint64_t> out(h.boxes.size(), 0);
   if (h.boxes.size() == 1) {
-    out[0] = total;
+    out[0] = static_cast<uint64_t>(lines.total);
     return out;
   }
-  out[0] = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(total * lines.root_fraction)));
-  const double rest = static_cast<double>(total > out[0] ? total - out[0] : 0);
+  // Paper 3.3.1: root_fraction in the root, the rest by quotient (or objects)...
+  const double root = total * lines.root_fraction;
   double weights = 0;
   auto weight = [&](const SceneBox& b) { return lines.box_budget == "objects" ? double(b.objects_total) : b.quotient; };
   for (size_t b = 1; b < h.boxes.size(); ++b) weights += weight(h.boxes[b]);
+  // ...but no subscene sampled more thinly than min_density times the root's
+  // density (lines per unit of box surface): with many subscenes the rest
+  // spread thin left them with fewer lines per area than the root. When the
+  // floors ask for more lines than there are, every box is scaled down alike.
+  const double root_density = root / line_box(h.boxes[0].bounds).surface_area();
+  std::vector<double> want(h.boxes.size(), 0.0);
+  want[0] = root;
+  double sum = root;
   for (size_t b = 1; b < h.boxes.size(); ++b) {
-    const uint64_t share = weights > 0 ? static_cast<uint64_t>(std::llround(rest * weight(h.boxes[b]) / weights)) : 0;
-    out[b] = std::max<uint64_t>(share, 4ull * h.boxes[b].ar_count());
+    const double share = weights > 0 ? (total - root) * weight(h.boxes[b]) / weights : 0.0;
+    want[b] = std::max(share, lines.min_density * root_density * line_box(h.boxes[b].bounds).surface_area());
+    sum += want[b];
   }
+  const double scale = sum > total ? total / sum : 1.0;
+  out[0] = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(want[0] * scale)));
+  for (size_t b = 1; b < h.boxes.size(); ++b)
+    out[b] = std::max<uint64_t>(static_cast<uint64_t>(std::llround(want[b] * scale)), 4ull * h.boxes[b].ar_count());
   return out;
 }
 

@@ -26,6 +26,7 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
       {"lines.total", std::to_string(o.lines.total)},
       {"lines.root_fraction", fmt::format("{}", o.lines.root_fraction)},
       {"lines.box_budget", o.lines.box_budget},
+      {"lines.min_density", fmt::format("{}", o.lines.min_density)},
       {"hierarchy.subscenes", o.solver.method == "hierarchical" ? "yes" : "no (solver.method = multipath)"},
       {"hierarchy.group_threshold", fmt::format("{}", o.hierarchy.group_threshold)},
       {"hierarchy.vp_area_ratio", fmt::format("{}", o.hierarchy.vp_area_ratio)},

@@ -215,7 +215,10 @@ void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector
   }
   out.resize(kept);
   if (!all_)
-    for (LineHit& h : out) h.patch = global(h.patch);
+    for (LineHit& h : out) {
+      h.traced = h.patch;
+      h.patch = global(h.patch);
+    }
 }
 
 }  // namespace mpath

@@ -15,7 +15,8 @@ namespace mpath {
 struct LineHit {
   double t;
   int patch;
-  bool along;  // the patch's front faces along the line's direction
+  bool along;       // the patch's front faces along the line's direction
+  int traced = -1;  // index among a subset tracer's patches (-1: a tracer of every patch)
 };
 
 struct NearestHit {
