@@ -43,7 +43,7 @@ def main():
     ap.add_argument("--seeds", default="1")
     ap.add_argument("--threads", default="0")
     ap.add_argument("overrides", nargs="*")
-    a = ap.parse_args()
+    a = ap.parse_intermixed_args()
     work = tempfile.mkdtemp(prefix="mpath-bench-")
     common = ["output.png=false", "output.exr=false", "solver.threads=" + a.threads] + a.overrides
     ref_dir = os.path.join(work, "reference")

@@ -6,23 +6,16 @@ ceiling), every surface of reflectance RHO emitting radiance 1 W/sr/m2
 
 usage: make_furnace.py RHO OUT_STEM
 """
+import os
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import make_room  # noqa: E402
 
 
 def box(quads, lo, hi, inward):
-    for axis in range(3):
-        u, v = (axis + 1) % 3, (axis + 2) % 3
-        for high in (0, 1):
-            c = list(lo)
-            c[axis] = hi[axis] if high else lo[axis]
-            du, dv = [0.0] * 3, [0.0] * 3
-            du[u], dv[v] = hi[u] - lo[u], hi[v] - lo[v]
-            p0 = tuple(c)
-            p1 = tuple(c[i] + du[i] for i in range(3))
-            p2 = tuple(c[i] + du[i] + dv[i] for i in range(3))
-            p3 = tuple(c[i] + dv[i] for i in range(3))
-            # [p0 p1 p2 p3] faces +axis: keep it on the high side of an outward box.
-            quads.append((p0, p3, p2, p1) if (high == 0) != inward else (p0, p1, p2, p3))
+    """Appends the six faces of a box, facing out of it, or into it when `inward`."""
+    quads.extend(tuple(f[::-1]) if inward else tuple(f) for f in make_room.box(lo, hi))
 
 
 def main(rho, stem):

@@ -288,21 +288,9 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
   }
 }
 
-uint64_t BoxStore::lines() const {
+uint64_t BoxStore::total(uint64_t StoreBox::*field) const {
   uint64_t n = 0;
-  for (const StoreBox& b : boxes_) n += b.lines;
-  return n;
-}
-
-uint64_t BoxStore::events() const {
-  uint64_t n = 0;
-  for (const StoreBox& b : boxes_) n += b.events;
-  return n;
-}
-
-uint64_t BoxStore::bytes() const {
-  uint64_t n = 0;
-  for (const StoreBox& b : boxes_) n += b.bytes;
+  for (const StoreBox& b : boxes_) n += b.*field;
   return n;
 }
 

@@ -60,9 +60,9 @@ class BoxStore {
   const StoreBox& box(int b) const { return boxes_[b]; }
   size_t box_count() const { return boxes_.size(); }
   size_t ar_total() const { return ar_total_; }
-  uint64_t lines() const;
-  uint64_t events() const;
-  uint64_t bytes() const;
+  uint64_t lines() const { return total(&StoreBox::lines); }
+  uint64_t events() const { return total(&StoreBox::events); }
+  uint64_t bytes() const { return total(&StoreBox::bytes); }
   // Per mesh face: crossings by the lines of the box it belongs to.
   std::vector<double> face_crossings(size_t faces) const;
 
@@ -72,6 +72,8 @@ class BoxStore {
   uint64_t chunk_lines(int box, uint64_t chunk) const { return boxes_[box].chunk_lines[chunk]; }
 
  private:
+  uint64_t total(uint64_t StoreBox::*field) const;
+
   linestore::Manifest manifest_;
   Hierarchy hierarchy_;
   std::vector<StoreBox> boxes_;

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "accelerated_shot.h"
 #include "progress.h"
 #include "sampling.h"
 #include "transport.h"
@@ -57,7 +58,8 @@ std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines) {
 }
 
 FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long budget,
-                          unsigned long long seed, int shards, const std::vector<double>& global_crossings) {
+                          unsigned long long seed, int shards, const std::vector<double>& global_crossings,
+                          const SubsceneNearest* accelerated) {
   const auto start = std::chrono::steady_clock::now();
   FirstShotStats stats;
   std::vector<int> emitters;
@@ -104,7 +106,8 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
       const Vec3 n = mesh.face_normal(face);
       const Vec3 org = uniform_point(mesh, patch, rng);
       const Vec3 dir = cosine_direction(n, rng);
-      const NearestHit hit = tracer.nearest_from(mesh.face_patch[face], org, dir, tfar);
+      const NearestHit hit = accelerated ? accelerated->nearest_from(mesh.face_patch[face], org, dir)
+                                         : tracer.nearest_from(mesh.face_patch[face], org, dir, tfar);
       if (hit.patch < 0) {
         for (int c = 0; c < ch; ++c) a.escaped[c] += power[c];
       } else {
@@ -125,6 +128,7 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   merge_received(acc, state);
   stats.lines = total;
   stats.emitter_faces = emitters.size();
+  if (accelerated) stats.associated_hits = accelerated->shortcuts();
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }

@@ -16,6 +16,7 @@ struct FirstShotStats {
   uint64_t lines = 0;
   uint64_t emitter_faces = 0;      // faces shot with local lines
   uint64_t global_emitter_faces = 0; // faces whose emission was left to the global lines
+  uint64_t associated_hits = 0;      // accelerated: lines ended on an associated patch
   double seconds = 0;
 };
 
@@ -30,7 +31,12 @@ std::vector<double> emitter_crossings(const Options& options, std::vector<double
 // Forecast crossings of each face by N lines uniform over the scene box: N 2A/S.
 std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines);
 
+class SubsceneNearest;
+
+// `accelerated`: find nearest hits through the subscenes' associated patches
+// (first_shot.accelerate) instead of the whole scene's tracer.
 FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long lines,
-                          unsigned long long seed, int shards, const std::vector<double>& global_crossings = {});
+                          unsigned long long seed, int shards, const std::vector<double>& global_crossings = {},
+                          const SubsceneNearest* accelerated = nullptr);
 
 }  // namespace mpath

@@ -16,6 +16,7 @@
 #include "render.h"
 #include "sampling.h"
 #include "solution_ply.h"
+#include "accelerated_shot.h"
 #include "box_store.h"
 #include "hierarchical.h"
 
@@ -126,8 +127,11 @@ void run_solve(const Options& options, const SolveFlags& flags) {
     std::vector<double> crossings;
     if (store) crossings = store->face_crossings(mesh.face_count());
     else crossings = forecast_crossings(mesh, static_cast<double>(options.lines.total));
+    std::unique_ptr<SubsceneNearest> accelerated;
+    if (options.first_shot.accelerate && store && store->box_count() > 1)
+      accelerated = std::make_unique<SubsceneNearest>(mesh, *store);
     shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, threads,
-                      emitter_crossings(options, std::move(crossings)));
+                      emitter_crossings(options, std::move(crossings)), accelerated.get());
     write_checkpoint(checkpoint, key, state, iterations);
   }
   t = clock::now();
@@ -205,6 +209,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
                    {"first_shot", shot.seconds}, {"iterations", iteration_seconds}, {"outputs", output_seconds},
                    {"total", seconds_since(start)}}},
       {"first_shot", {{"lines", shot.lines}, {"emitter_faces", shot.emitter_faces},
+                      {"associated_hits", shot.associated_hits},
                       {"global_emitter_faces", shot.global_emitter_faces}, {"from_checkpoint", resumed}}},
       {"lines", {{"global", iterations.lines}, {"hits", iterations.hits}, {"local", shot.lines}}},
       {"iterations", {{"count", iterations.passes.size()}, {"converged", iterations.converged},

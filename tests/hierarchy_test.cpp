@@ -318,11 +318,12 @@ TEST(Transmittance, ArsNoLineCrossedTakeTheirNeighbours) {
   EXPECT_EQ(redirect_targets(box, std::vector<bool>(box.ar_count(), false))[hole], kNoTarget);
 }
 
-TEST(HierarchicalSolve, FurnaceWithSubscenesGivesExactRadiosityAndEnergyClosesEveryIteration) {
-  // Every surface emits exitance E and reflects rho: B = E / (1 - rho) exactly.
-  const double rho = 0.5, exitance = 1.0;
+// Per-face error of a hierarchical furnace solve: (mean of B, RMS of B - exact) / exact.
+std::pair<double, double> furnace_errors(bool accelerate, double rho, double exitance) {
   TempDir dir;
   Options o = test::test_options(2'000'000, 500'000, 0.02);
+  o.first_shot.accelerate = accelerate;
+  o.first_shot.mode = "local";  // every emitter shot by local lines, through the subscenes
   o.scene.file = test::write_obj(furnished_room(rho, exitance / std::numbers::pi), dir / "room");
   o.store.dir = dir / "store";
   o.solver.method = "hierarchical";
@@ -332,9 +333,9 @@ TEST(HierarchicalSolve, FurnaceWithSubscenesGivesExactRadiosityAndEnergyClosesEv
   const auto s = test::solve_stored(o, [&](const RadiosityState& st) {
     worst_residual = std::max(worst_residual, std::fabs(st.energy_residual()) / st.emitted_total());
   });
-  ASSERT_EQ(s.boxes, 3u);
+  EXPECT_EQ(s.boxes, 3u);
   EXPECT_TRUE(s.log.converged);
-  EXPECT_LT(worst_residual, 1e-11);
+  EXPECT_LT(worst_residual, 1e-11);  // energy closes after every iteration
   const double exact = exitance / (1 - rho);
   double area = 0, weighted = 0, sq = 0;
   for (size_t f = 0; f < s.mesh.face_count(); ++f) {
@@ -344,8 +345,33 @@ TEST(HierarchicalSolve, FurnaceWithSubscenesGivesExactRadiosityAndEnergyClosesEv
     weighted += a * b;
     sq += a * (b - exact) * (b - exact);
   }
-  EXPECT_NEAR(weighted / area, exact, 0.01 * exact);           // mean within 1 %
-  EXPECT_LT(std::sqrt(sq / area) / exact, 0.05);               // per face: noise of 0.02 m2 patches
+  return {weighted / area / exact - 1, std::sqrt(sq / area) / exact};
+}
+
+TEST(HierarchicalSolve, FurnaceWithSubscenesGivesExactRadiosityWithAndWithoutAcceleratedFirstShot) {
+  // Every surface emits exitance E and reflects rho: B = E / (1 - rho) exactly.
+  const auto [plain_mean, plain_rms] = furnace_errors(false, 0.5, 1.0);
+  EXPECT_NEAR(plain_mean, 0.0, 0.01);
+  // Per face, the yardstick is classic Multipath with as many lines (the
+  // same first shot, fresh lines): the hierarchy's per-face noise may be
+  // somewhat larger (its root has fewer lines), not of another order.
+  Options o = test::test_options(2'000'000, 500'000, 0.02);
+  o.first_shot.mode = "local";
+  const test::Solved classic = test::solve_classic_in_memory(furnished_room(0.5, 1.0 / std::numbers::pi), o);
+  double area = 0, sq = 0;
+  for (size_t f = 0; f < classic.mesh.face_count(); ++f) {
+    const double a = classic.mesh.face_area(static_cast<int>(f));
+    const double d = classic.state.radiosity(classic.mesh, f)[0] - 2.0;
+    area += a;
+    sq += a * d * d;
+  }
+  const double classic_rms = std::sqrt(sq / area) / 2.0;
+  EXPECT_LT(plain_rms, 1.5 * classic_rms) << "classic " << classic_rms;
+  // Associated patches are an approximation: still exact on average, and
+  // per face no more than a quarter worse (measured: 5.2 % against 4.6 %).
+  const auto [fast_mean, fast_rms] = furnace_errors(true, 0.5, 1.0);
+  EXPECT_NEAR(fast_mean, 0.0, 0.01);
+  EXPECT_LT(fast_rms, 1.25 * plain_rms);
 }
 
 }  // namespace
@@ -419,6 +445,21 @@ TEST(HierarchicalPrograms, ShardedStoreEqualsOneMadeAtOnce) {
   const test::RunResult r = solve_room(parts + " output.dir=" + (dir / "c").string());
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("box0001.part0001of0002.lines"), std::string::npos) << r.output;
+}
+
+TEST(HierarchicalPrograms, ResumeGivesTheUninterruptedResult) {
+  TempDir dir;
+  const std::string store = " store.dir=" + (dir / "store").string() + " solver.tolerance=1e-9";
+  ASSERT_EQ(preprocess_room(store).exit_code, 0);
+  ASSERT_EQ(solve_room(store + " solver.iterations=4 output.dir=" + (dir / "straight").string()).exit_code, 0);
+  ASSERT_EQ(solve_room(store + " solver.iterations=2 output.dir=" + (dir / "resumed").string()).exit_code, 0);
+  const test::RunResult r = solve_room(store + " solver.iterations=4 --resume output.dir=" + (dir / "resumed").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(test::read_file(dir / "straight/solution.ply"), test::read_file(dir / "resumed/solution.ply"));
+  const auto a = nlohmann::json::parse(test::read_file(dir / "straight/report.json"));
+  const auto b = nlohmann::json::parse(test::read_file(dir / "resumed/report.json"));
+  EXPECT_EQ(a["energy"]["in_transit"], b["energy"]["in_transit"]);
+  EXPECT_GT(a["energy"]["in_transit"].get<double>(), 0.0);  // power held in ARs is checkpointed too
 }
 
 // office2 (RenderPark's furnished office, 422 polygons), hierarchical with

@@ -1,5 +1,6 @@
 #include "test_util.h"
 
+#include "accelerated_shot.h"
 #include "box_store.h"
 #include "hierarchical.h"
 #include "preprocess.h"
@@ -149,8 +150,10 @@ StoredSolve solve_stored(const Options& options, const std::function<void(const 
   const Tracer tracer(s.mesh);
   s.state = make_state(scene, s.mesh);
   add_ar_state(store, s.state);
+  std::unique_ptr<SubsceneNearest> accelerated;
+  if (options.first_shot.accelerate) accelerated = std::make_unique<SubsceneNearest>(s.mesh, store);
   first_shot(s.mesh, tracer, s.state, options.first_shot.lines, options.lines.seed, options.solver.threads,
-             emitter_crossings(options, store.face_crossings(s.mesh.face_count())));
+             emitter_crossings(options, store.face_crossings(s.mesh.face_count())), accelerated.get());
   iterate(options, s.state, s.log, [&](unsigned pass) {
     PassStats p = hierarchical_iteration(store, s.state, pass, options.solver.threads, line_power(options, store, s.log),
                                          options.solver.schedule == "v-cycle");
