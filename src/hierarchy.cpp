@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <queue>
 #include <set>
 
@@ -481,7 +480,9 @@ std::string describe_hierarchy(const Hierarchy& h, const std::vector<uint64_t>& 
                        "{} child box(es), size {:.4g} x {:.4g} x {:.4g}",
                        "", 2 * indent, b, b == 0 ? " (root)" : "", box.depth, box.objects_total, box.objects.size(),
                        box.polygons_total, box.patches.size(), box.children.size(), s.x, s.y, s.z);
-    if (b > 0) out += fmt::format(", quotient {:.3f}, VP grid {}, {} ARs", box.quotient, box.grid[0], box.ar_count());
+    if (b > 0)
+      out += fmt::format(", quotient {:.3f}, VP grids {}x{}, {}x{}, {}x{} (x, y, z faces), {} ARs", box.quotient, box.grid[0],
+                         box.grid[0], box.grid[2], box.grid[2], box.grid[4], box.grid[4], box.ar_count());
     if (b < static_cast<int>(lines.size())) out += fmt::format(", {} lines", lines[b]);
     out += "\n";
     for (auto it = box.children.rbegin(); it != box.children.rend(); ++it) stack.push_back({*it, indent + 1});
