@@ -25,12 +25,19 @@ constexpr size_t kHeaderBytes = 16, kFooterBytes = 40;
 constexpr uint64_t kMaxChunkBytes = 1ull << 30;
 
 std::string compress(const std::string& raw, int level) {
-  ZSTD_CCtx* cctx = ZSTD_createCCtx();
+  // One compression context per thread, kept: making one per chunk costs
+  // its tables' allocation every time.
+  struct Context {
+    ZSTD_CCtx* cctx = ZSTD_createCCtx();
+    ~Context() { ZSTD_freeCCtx(cctx); }
+  };
+  thread_local Context context;
+  ZSTD_CCtx* cctx = context.cctx;
+  ZSTD_CCtx_reset(cctx, ZSTD_reset_session_and_parameters);
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_compressionLevel, level);
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
   std::string out(ZSTD_compressBound(raw.size()), '\0');
   const size_t n = ZSTD_compress2(cctx, out.data(), out.size(), raw.data(), raw.size());
-  ZSTD_freeCCtx(cctx);
   if (ZSTD_isError(n)) throw InputError(fmt::format("zstd compression failed: {}", ZSTD_getErrorName(n)));
   out.resize(n);
   return out;
@@ -240,7 +247,8 @@ BoxFileReader::BoxFileReader(const fs::path& path) : path_(path) {
   take<uint64_t>(index, pos);  // reserved
   if (counts_raw > kMaxChunkBytes || counts_offset + counts_bytes > index_offset)
     fail("implausible crossing-count sizes in the index");
-  const std::string raw = read_frame(counts_offset, counts_bytes, counts_raw, "crossing counts");
+  std::string raw;
+  read_frame(counts_offset, counts_bytes, counts_raw, "crossing counts", raw);
   const auto* bytes = reinterpret_cast<const unsigned char*>(raw.data());
   size_t p = 0;
   std::vector<uint32_t>* arrays[] = {&counts_.patch_crossings, &counts_.wall_lines, &counts_.wall_open,
@@ -277,22 +285,28 @@ uint64_t BoxFileReader::events() const {
   return n;
 }
 
-std::string BoxFileReader::read_frame(uint64_t offset, uint64_t bytes, uint64_t raw_bytes, const std::string& what) {
+void BoxFileReader::read_frame(uint64_t offset, uint64_t bytes, uint64_t raw_bytes, const std::string& what,
+                               std::string& raw) {
   compressed_.resize(bytes);
   in_.clear();
   in_.seekg(static_cast<std::streamoff>(offset));
   in_.read(compressed_.data(), static_cast<std::streamsize>(bytes));
   if (!in_) fail(fmt::format("{}: truncated", what));
-  std::string raw(raw_bytes, '\0');
-  const size_t n = ZSTD_decompress(raw.data(), raw.size(), compressed_.data(), compressed_.size());
+  raw.resize(raw_bytes);  // keeps its memory from chunk to chunk
+  if (!dctx_) dctx_ = ZSTD_createDCtx();
+  const size_t n = ZSTD_decompressDCtx(static_cast<ZSTD_DCtx*>(dctx_), raw.data(), raw.size(), compressed_.data(),
+                                       compressed_.size());
   if (ZSTD_isError(n)) fail(fmt::format("{}: corrupted ({})", what, ZSTD_getErrorName(n)));
   if (n != raw_bytes) fail(fmt::format("{}: corrupted (size {} instead of {})", what, n, raw_bytes));
-  return raw;
+}
+
+BoxFileReader::~BoxFileReader() {
+  if (dctx_) ZSTD_freeDCtx(static_cast<ZSTD_DCtx*>(dctx_));
 }
 
 void BoxFileReader::read_chunk(size_t index, DecodedChunk& out) {
   const ChunkInfo& c = chunks_.at(index);
-  raw_ = read_frame(c.offset, c.bytes, c.raw_bytes, fmt::format("chunk {}", index));
+  read_frame(c.offset, c.bytes, c.raw_bytes, fmt::format("chunk {}", index), raw_);
   if (!decode_chunk(reinterpret_cast<const unsigned char*>(raw_.data()), raw_.size(), c.lines, out) ||
       out.events.size() != c.events)
     fail(fmt::format("chunk {}: corrupted (records do not decode)", index));

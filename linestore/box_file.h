@@ -84,6 +84,9 @@ class BoxFileWriter {
 class BoxFileReader {
  public:
   explicit BoxFileReader(const std::filesystem::path& path);
+  ~BoxFileReader();
+  BoxFileReader(const BoxFileReader&) = delete;
+  BoxFileReader& operator=(const BoxFileReader&) = delete;
   uint32_t box() const { return box_; }
   const std::vector<ChunkInfo>& chunks() const { return chunks_; }
   const BoxCounts& counts() const { return counts_; }
@@ -93,7 +96,7 @@ class BoxFileReader {
 
  private:
   [[noreturn]] void fail(const std::string& what) const;
-  std::string read_frame(uint64_t offset, uint64_t bytes, uint64_t raw_bytes, const std::string& what);
+  void read_frame(uint64_t offset, uint64_t bytes, uint64_t raw_bytes, const std::string& what, std::string& raw);
 
   std::filesystem::path path_;
   std::ifstream in_;
@@ -102,6 +105,7 @@ class BoxFileReader {
   std::vector<ChunkInfo> chunks_;
   BoxCounts counts_;
   std::string compressed_, raw_;
+  void* dctx_ = nullptr;  // zstd decompression context, made at the first chunk
 };
 
 }  // namespace mpath::linestore

@@ -71,6 +71,10 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
   };
   std::vector<ChildCrossing> children;
   linestore::BoxCounts& counts = tally.counts;
+  // (AR, patch met first) of every line end, tallied once per chunk: runs of
+  // equal keys make one map update each.
+  thread_local std::vector<uint64_t> met;
+  met.clear();
   for (uint64_t i = 0; i < n; ++i) {
     double u[4];
     sequence_.point(first + i, rng, u);
@@ -124,10 +128,17 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
         // Associated patches: what a line entering at either end meets first.
         const Event& a = record.events.front();
         const Event& b = record.events.back();
-        if (a.kind == Event::patch) tally.first_met[linestore::associated_key(record.entry_ar, a.id)]++;
-        if (b.kind == Event::patch) tally.first_met[linestore::associated_key(record.exit_ar, b.id)]++;
+        if (a.kind == Event::patch) met.push_back(linestore::associated_key(record.entry_ar, a.id));
+        if (b.kind == Event::patch) met.push_back(linestore::associated_key(record.exit_ar, b.id));
       }
     }
+  }
+  std::sort(met.begin(), met.end());
+  for (size_t i = 0; i < met.size();) {
+    size_t j = i;
+    while (j < met.size() && met[j] == met[i]) ++j;
+    tally.first_met[met[i]] += static_cast<uint32_t>(j - i);
+    i = j;
   }
   // Lines in order of their first and last crossings: neighbouring records
   // start alike, which the delta coding and zstd turn into fewer bytes. Any

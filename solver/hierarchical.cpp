@@ -56,6 +56,13 @@ struct alignas(128) BoxShard {
   std::vector<double> child_in;    // power entering the children: their In
   std::vector<double> wall_used;   // fraction of each wall AR's quota sent
   std::vector<double> child_used;  // and of each child AR's
+  // Scratch of a line: its sends, taken before its receives.
+  struct Send {
+    int from;  // node index; -1 and m are the line's ends
+    int dir;   // +1 along the line, -1 against it
+    double power[3];
+  };
+  std::vector<Send> sends;
 };
 
 // Moves the power held in a box's ARs (from `base` in `held`) into the
@@ -193,19 +200,18 @@ bool chunk_fits(const BoxInputs& in, const linestore::DecodedChunk& chunk) {
 
 // One line of the box in both directions (design.md section 7): every face,
 // wall AR and child box on it sends before anything is received.
+// CH: the channel count (1 or 3), fixed at compile time so the per-channel
+// loops unroll.
+template <int CH>
 void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t entry, uint32_t exit, BoxShard& shard,
                         double allowance) {
   ShardAccumulator& acc = shard.faces;
-  const int ch = in.channels;
+  constexpr int ch = CH;
   ++acc.lines;
   acc.hits += m;
   if (m == 0) return;  // a line meeting nothing carries nothing
-  struct Send {
-    int from;  // node index; -1 and m are the line's ends
-    int dir;   // +1 along the line, -1 against it
-    double power[3];
-  };
-  thread_local std::vector<Send> sends;
+  using Send = BoxShard::Send;
+  std::vector<Send>& sends = shard.sends;
   sends.clear();
   auto send_power = [&](int from, int dir, const double* power) {
     Send s{from, dir, {0, 0, 0}};
@@ -348,8 +354,9 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
       const size_t stride = line_stride(n);
       const size_t take = std::min<size_t>(n, in.parts[i].lines);
       for (size_t k = 0, l = 0; k < take; ++k, l = (l + stride) % n)
-        transport_box_line(in, chunk.events.data() + chunk.first[l], chunk.first[l + 1] - chunk.first[l],
-                           chunk.entry_ar[l], chunk.exit_ar[l], a, allowance);
+        (ch == 1 ? transport_box_line<1> : transport_box_line<3>)(
+            in, chunk.events.data() + chunk.first[l], chunk.first[l + 1] - chunk.first[l], chunk.entry_ar[l],
+            chunk.exit_ar[l], a, allowance);
       progress.advance(take);
     }
   });
