@@ -36,11 +36,11 @@ std::string compress(const std::string& raw, int level) {
   ZSTD_CCtx_reset(cctx, ZSTD_reset_session_and_parameters);
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_compressionLevel, level);
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
-  std::string out(ZSTD_compressBound(raw.size()), '\0');
-  const size_t n = ZSTD_compress2(cctx, out.data(), out.size(), raw.data(), raw.size());
+  thread_local std::vector<char> buffer;  // no zero-filling of a fresh bound-sized string per chunk
+  buffer.resize(std::max(buffer.size(), ZSTD_compressBound(raw.size())));
+  const size_t n = ZSTD_compress2(cctx, buffer.data(), buffer.size(), raw.data(), raw.size());
   if (ZSTD_isError(n)) throw InputError(fmt::format("zstd compression failed: {}", ZSTD_getErrorName(n)));
-  out.resize(n);
-  return out;
+  return std::string(buffer.data(), n);
 }
 
 template <typename T>
@@ -66,7 +66,7 @@ fs::path partial_path(const fs::path& path) {
 }
 
 std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events) {
-  ChunkEncoder encoder;
+  ChunkEncoder encoder(lines.size());
   for (const LineRecord& l : lines) encoder.add(l);
   events = encoder.events();
   return encoder.finish();

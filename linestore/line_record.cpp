@@ -47,6 +47,7 @@ void ChunkEncoder::add(const LineRecord& line) {
 
 std::string ChunkEncoder::finish() {
   std::string out;
+  out.reserve(10 + lines_.size() + events_.size());
   put_varint(out, lines_.size());
   out += lines_;
   out += events_;

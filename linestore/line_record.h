@@ -35,6 +35,11 @@ struct LineRecord {
 // Encodes the lines of one chunk (docs/store-format.md).
 class ChunkEncoder {
  public:
+  // `lines`: how many lines will be added (to size the streams once).
+  explicit ChunkEncoder(size_t lines = 0) {
+    lines_.reserve(lines * 2);
+    events_.reserve(lines * 8);
+  }
   void add(const LineRecord& line);
   uint64_t events() const { return event_count_; }
   std::string finish();
