@@ -4,6 +4,9 @@
 
 #include <fmt/format.h>
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <queue>
@@ -238,9 +241,19 @@ class Builder {
   // Greedy bottom-up grouping: the pair with the largest quotient above the
   // threshold first; each new group is an item at once.
   void group() {
-    const size_t n = items_.size();
-    for (size_t a = 0; a < n; ++a)
-      for (size_t b = a + 1; b < n; ++b) push_pair(static_cast<int>(a), static_cast<int>(b));
+    // Every pair once, on every thread; the queue orders candidates totally
+    // (quotient, then indices), so the grouping does not depend on threads.
+    const int n = static_cast<int>(items_.size());
+    tbb::enumerable_thread_specific<std::vector<Candidate>> found;
+    tbb::parallel_for(0, n, [&](int a) {
+      auto& local = found.local();
+      Candidate c;
+      for (int b = a + 1; b < n; ++b)
+        if (candidate(a, b, c)) local.push_back(c);
+    });
+    std::vector<Candidate> all;
+    for (auto& local : found) all.insert(all.end(), local.begin(), local.end());
+    queue_ = std::priority_queue<Candidate>(std::less<Candidate>(), std::move(all));
     while (!queue_.empty()) {
       const Candidate c = queue_.top();
       queue_.pop();
@@ -281,12 +294,22 @@ class Builder {
     }
   };
 
+  // The pair (a, b) as a candidate when its quotient passes the threshold.
+  bool candidate(int a, int b, Candidate& out) const {
+    const Bounds& x = items_[a].bounds;
+    const Bounds& y = items_[b].bounds;
+    const double dx = std::max(x.hi.x, y.hi.x) - std::min(x.lo.x, y.lo.x);
+    const double dy = std::max(x.hi.y, y.hi.y) - std::min(x.lo.y, y.lo.y);
+    const double dz = std::max(x.hi.z, y.hi.z) - std::min(x.lo.z, y.lo.z);
+    const double area = 2 * (dx * dy + dy * dz + dz * dx);
+    if (!(area > 0) || area > kMaxSceneShare * scene_area_) return false;
+    out = {(items_[a].area + items_[b].area) / area, a, b};
+    return out.q > options_.group_threshold;
+  }
+
   void push_pair(int a, int b) {
-    const Bounds m = merged(items_[a].bounds, items_[b].bounds);
-    const double area = m.surface_area();
-    if (!(area > 0) || area > kMaxSceneShare * scene_area_) return;
-    const double q = (items_[a].area + items_[b].area) / area;
-    if (q > options_.group_threshold) queue_.push({q, a, b});
+    Candidate c;
+    if (candidate(a, b, c)) queue_.push(c);
   }
 
   void collect_objects(int item, std::vector<int>& out) const {
