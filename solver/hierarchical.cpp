@@ -9,10 +9,15 @@
 
 #include "error.h"
 #include "progress.h"
+#include "sampling.h"
 
 namespace mpath {
 
 using linestore::Event;
+
+namespace {
+constexpr unsigned kUncarriedStream = 7;
+}
 using linestore::kNoAr;
 
 void add_ar_state(const BoxStore& store, RadiosityState& state) {
@@ -441,6 +446,55 @@ Remaining remaining_power(const BoxStore& store, const RadiosityState& state) {
     }
   }
   return r;
+}
+
+uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, RadiosityState& state,
+                         unsigned pass, unsigned long long seed, int threads) {
+  const int ch = state.channels;
+  std::vector<int> faces;
+  for (size_t b = 0; b < store.box_count(); ++b) {
+    const StoreBox& box = store.box(static_cast<int>(b));
+    for (size_t f = 0; f < box.face_global.size(); ++f) {
+      if (box.face_proxy[f] >= 0) continue;
+      const int g = box.face_global[f];
+      bool any = false;
+      for (int c = 0; c < ch; ++c) any |= state.unshot[state.at(static_cast<size_t>(g), c)] > 0;
+      if (any) faces.push_back(g);
+    }
+  }
+  if (faces.empty()) return 0;
+  std::sort(faces.begin(), faces.end());
+  const int shards = std::max(1, std::min<int>(threads, static_cast<int>(faces.size())));
+  std::vector<ShardAccumulator> acc(shards);
+  const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
+  tbb::parallel_for(0, shards, [&](int s) {
+    ShardAccumulator& a = acc[s];
+    a.reset(state.faces);
+    for (size_t i = faces.size() * s / shards; i < faces.size() * (s + 1) / shards; ++i) {
+      const int face = faces[i];
+      Rng rng = make_rng(seed, kUncarriedStream, (static_cast<unsigned long long>(pass) << 32) + face);
+      const Patch& patch = mesh.patches[mesh.face_patch[face]];
+      const Vec3 n = mesh.face_normal(face);
+      double power[3];
+      for (int c = 0; c < ch; ++c) power[c] = state.unshot[state.at(static_cast<size_t>(face), c)] / kUncarriedLines;
+      for (int k = 0; k < kUncarriedLines; ++k) {
+        const Vec3 org = uniform_point(mesh, patch, rng);
+        const Vec3 dir = cosine_direction(n, rng);
+        const NearestHit hit = tracer.nearest_from(mesh.face_patch[face], org, dir, tfar);
+        if (hit.patch < 0) {
+          for (int c = 0; c < ch; ++c) a.escaped[c] += power[c];
+        } else {
+          const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
+          receive(state, mesh.patch_faces[hit.patch][side], power, a);
+        }
+      }
+    }
+  });
+  // The shot power leaves its faces' unshot, then the hits are merged in shard order.
+  for (int face : faces)
+    for (int c = 0; c < ch; ++c) state.unshot[state.at(static_cast<size_t>(face), c)] = 0;
+  merge_received(acc, state);
+  return faces.size() * kUncarriedLines;
 }
 
 double line_power(const Options& options, const BoxStore& store, const IterationLog& log) {

@@ -13,6 +13,7 @@
 #include "box_store.h"
 #include "classic.h"
 #include "radiosity_state.h"
+#include "tracer.h"
 #include "transport.h"
 
 namespace mpath {
@@ -43,6 +44,14 @@ struct Remaining {
   double deepest_power = 0;
 };
 Remaining remaining_power(const BoxStore& store, const RadiosityState& state);
+
+// Power no stored line can carry (on faces without a crossed proxy: small
+// patches in boxes with few lines) is shot with kUncarriedLines local lines
+// per face, like the first shot, so that it moves on instead of waiting;
+// returns the local lines cast. Run after each iteration.
+inline constexpr int kUncarriedLines = 16;
+uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, RadiosityState& state,
+                         unsigned pass, unsigned long long seed, int threads);
 
 // A pass takes the n lines of a chunk in the order 0, s, 2s, ... (mod n):
 // the step s, near n times the golden ratio and coprime to n, puts lines far

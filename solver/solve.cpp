@@ -138,11 +138,15 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   const uint64_t hits_before = iterations.hits;  // passes restored from a checkpoint are not timed here
   const auto save = [&] { write_checkpoint(checkpoint, key, state, iterations); };
   std::vector<BoxPassStats> box_stats;
+  uint64_t uncarried_lines = 0;  // local lines for power no stored line can carry
   if (store) {
     iterate(options, state, iterations,
             [&](unsigned pass) {
-              return hierarchical_iteration(*store, state, pass, threads, line_power(options, *store, iterations),
-                                            options.solver.schedule == "v-cycle", &box_stats);
+              PassStats p = hierarchical_iteration(*store, state, pass, threads, line_power(options, *store, iterations),
+                                                   options.solver.schedule == "v-cycle", &box_stats);
+              uncarried_lines += shoot_uncarried(mesh, tracer, *store, state, pass, options.lines.seed, threads);
+              p.unshot_fraction = state.remaining_fraction();
+              return p;
             }, save);
   } else {
     iterate(options, state, iterations, [&](unsigned pass) {
@@ -211,7 +215,8 @@ void run_solve(const Options& options, const SolveFlags& flags) {
       {"first_shot", {{"lines", shot.lines}, {"emitter_faces", shot.emitter_faces},
                       {"associated_hits", shot.associated_hits},
                       {"global_emitter_faces", shot.global_emitter_faces}, {"from_checkpoint", resumed}}},
-      {"lines", {{"global", iterations.lines}, {"hits", iterations.hits}, {"local", shot.lines}}},
+      {"lines", {{"global", iterations.lines}, {"hits", iterations.hits}, {"local", shot.lines},
+                 {"local_uncarried", uncarried_lines}}},
       {"iterations", {{"count", iterations.passes.size()}, {"converged", iterations.converged},
                       {"tolerance", options.solver.tolerance}, {"cap", options.solver.iterations},
                       {"unshot_fraction", state.unshot_total() / state.emitted_total()},

@@ -157,6 +157,8 @@ StoredSolve solve_stored(const Options& options, const std::function<void(const 
   iterate(options, s.state, s.log, [&](unsigned pass) {
     PassStats p = hierarchical_iteration(store, s.state, pass, options.solver.threads, line_power(options, store, s.log),
                                          options.solver.schedule == "v-cycle");
+    shoot_uncarried(s.mesh, tracer, store, s.state, pass, options.lines.seed, options.solver.threads);
+    p.unshot_fraction = s.state.remaining_fraction();
     if (after_each) after_each(s.state);
     return p;
   });
