@@ -3,8 +3,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cmath>
 #include <chrono>
+#include <cmath>
 #include <numeric>
 
 #include "error.h"
@@ -14,11 +14,11 @@
 namespace mpath {
 
 using linestore::Event;
+using linestore::kNoAr;
 
 namespace {
-constexpr unsigned kUncarriedStream = 7;
-}
-using linestore::kNoAr;
+constexpr unsigned kUncarriedStream = 7;  // random stream of the local lines for uncarried power
+}  // namespace
 
 void add_ar_state(const BoxStore& store, RadiosityState& state) {
   state.ar_in.assign(store.ar_total() * state.channels, 0.0);
@@ -309,10 +309,6 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
     }
   }
 }
-
-}  // namespace
-
-namespace {
 
 struct BoxResult {
   std::array<double, 3> absorbed{}, escaped{};
