@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <numeric>
 #include <queue>
 #include <set>
 
@@ -198,14 +200,27 @@ class Builder {
     for (const Patch& p : mesh.patches) objects = std::max(objects, p.object + 1);
     object_patches_.resize(objects);
     for (size_t p = 0; p < mesh.patches.size(); ++p) object_patches_[mesh.patches[p].object].push_back(static_cast<uint32_t>(p));
+    eps_ = 1e-6 * std::max(mesh.bounds.diagonal(), 1e-30);
+    scene_area_ = mesh.bounds.surface_area();
+    // An object too large to group whole (a file whose furniture is one
+    // object, or the whole scene in one) is split into its connected parts,
+    // which are the items instead (design.md section 3).
+    for (int o = 0; o < objects; ++o) {
+      Bounds b;
+      for (uint32_t p : object_patches_[o])
+        for (uint32_t v : mesh.patches[p].v) b.extend(mesh.vertices[v]);
+      if (object_patches_[o].empty() || b.surface_area() <= kMaxSceneShare * scene_area_) continue;
+      auto parts = connected_parts(object_patches_[o]);
+      object_patches_[o] = std::move(parts[0]);
+      for (size_t k = 1; k < parts.size(); ++k) object_patches_.push_back(std::move(parts[k]));
+    }
+    objects = static_cast<int>(object_patches_.size());
     object_polygons_.resize(objects);
     for (int o = 0; o < objects; ++o) {
       std::set<int> polygons;
       for (uint32_t p : object_patches_[o]) polygons.insert(mesh.patches[p].polygon);
       object_polygons_[o] = polygons.size();
     }
-    eps_ = 1e-6 * std::max(mesh.bounds.diagonal(), 1e-30);
-    scene_area_ = mesh.bounds.surface_area();
     for (int o = 0; o < objects; ++o) {
       if (object_patches_[o].empty()) continue;
       Item item;
@@ -219,6 +234,31 @@ class Builder {
       }
       items_.push_back(std::move(item));
     }
+  }
+
+  // Patches joined by shared corners (positions equal to 1e-6 of the scene's
+  // size), as sets of patches, largest first (ties by first patch).
+  std::vector<std::vector<uint32_t>> connected_parts(const std::vector<uint32_t>& patches) const {
+    std::vector<uint32_t> parent(patches.size());
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    std::map<std::array<long long, 3>, uint32_t> corner;  // position -> first patch seen there
+    for (uint32_t i = 0; i < patches.size(); ++i)
+      for (uint32_t v : mesh_.patches[patches[i]].v) {
+        const Vec3& x = mesh_.vertices[v];
+        const std::array<long long, 3> key{std::llround(x.x / eps_), std::llround(x.y / eps_), std::llround(x.z / eps_)};
+        const auto [it, fresh] = corner.emplace(key, i);
+        if (!fresh) parent[find(i)] = find(it->second);
+      }
+    std::map<uint32_t, std::vector<uint32_t>> by_root;
+    for (uint32_t i = 0; i < patches.size(); ++i) by_root[find(i)].push_back(patches[i]);
+    std::vector<std::vector<uint32_t>> parts;
+    for (auto& [root, list] : by_root) parts.push_back(std::move(list));
+    std::stable_sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+    return parts;
   }
 
   // The scene's shell: an object lying against a side of the scene box and

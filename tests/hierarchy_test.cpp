@@ -128,6 +128,21 @@ TEST(Hierarchy, TwoFarApartTablesBuildTwoSubscenesAndALonePolygonNone) {
   EXPECT_EQ(build_hierarchy(mesh, shallow, false).boxes.size(), 1u);
 }
 
+TEST(Hierarchy, OneObjectForTheWholeSceneIsSplitIntoItsConnectedParts) {
+  // The same room written as a single object: its connected parts (the
+  // shell, each table's top and legs, the poster) are grouped instead.
+  Scene scene = furnished_room(0.5, 0);
+  for (Polygon& p : scene.polygons) p.object = 0;
+  scene.objects.resize(1);
+  const PatchMesh mesh = build_mesh(scene, 0.05);
+  const Hierarchy h = build_hierarchy(mesh, Options::Hierarchy{}, false);
+  ASSERT_EQ(h.boxes.size(), 3u) << describe_hierarchy(h, {});
+  for (int b : h.boxes[0].children) {
+    EXPECT_EQ(h.boxes[b].objects.size(), 5u);  // a top and four legs, as parts
+    EXPECT_NEAR(h.boxes[b].bounds.size().x, 0.8, 1e-12);
+  }
+}
+
 TEST(Hierarchy, ARoomWithALonePanelGetsNoSubscene) {
   // A lone quad and a room: grouping never pays.
   Scene scene;
