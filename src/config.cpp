@@ -169,6 +169,7 @@ const std::map<std::string, Setter>& setters() {
          if (g < 0 || g > 64 || (g & (g - 1)) != 0) bad_value(s, "expected 0 (automatic) or a power of two up to 64");
          o.hierarchy.vp_grid = static_cast<int>(g);
        }},
+      {"hierarchy.max_share", [](auto& n, auto& s, Options& o) { o.hierarchy.max_share = in_range(get_number(n, s), 0.0, 1.0, s); }},
       {"hierarchy.max_depth", [](auto& n, auto& s, Options& o) { o.hierarchy.max_depth = static_cast<int>(in_range(get_integer(n, s), 0, 64, s)); }},
       {"lines.total", [](auto& n, auto& s, Options& o) { o.lines.total = positive(get_integer(n, s), s); }},
       {"lines.root_fraction", [](auto& n, auto& s, Options& o) { o.lines.root_fraction = in_range(get_number(n, s), 0.0, 1.0, s); }},
@@ -315,6 +316,7 @@ toml::table options_table(const Options& o) {
       {"hierarchy", toml::table{{"group_threshold", o.hierarchy.group_threshold},
                                 {"vp_area_ratio", o.hierarchy.vp_area_ratio},
                                 {"vp_grid", o.hierarchy.vp_grid},
+                                {"max_share", o.hierarchy.max_share},
                                 {"max_depth", o.hierarchy.max_depth}}},
       {"lines", toml::table{{"total", static_cast<int64_t>(o.lines.total)},
                             {"root_fraction", o.lines.root_fraction},

@@ -45,6 +45,8 @@ struct Options {
     double group_threshold = 0.4;  // docs/algorithm.md: a table and its legs group at about 0.4
     double vp_area_ratio = 16.0;
     int vp_grid = 0;  // 0: derived from vp_area_ratio
+    // Largest subscene box, as a share of the scene box's surface area.
+    double max_share = 0.5;
     int max_depth = 1;  // docs/algorithm.md: one level measured best
   } hierarchy;
 

@@ -27,9 +27,8 @@ constexpr int kMaxGrid = 64;
 // A group box that would enclose a single group item growing its surface by
 // less than this factor takes that item's contents instead of nesting it.
 constexpr double kAbsorbGrowth = 1.5;
-// A subscene is a part of its scene: a group whose box would have more than
-// this share of the scene box's surface (a room's shell grouped with what it
-// holds) is not formed.
+// An object whose box has more than this share of the scene box's surface is
+// too large to be grouped whole (hierarchy.max_share bounds the groups).
 constexpr double kMaxSceneShare = 0.5;
 // A subscene holds at least this many polygons (two books on a shelf do not
 // pay for the walls, ARs and lines of a box of their own)...
@@ -342,7 +341,7 @@ class Builder {
     const double dy = std::max(x.hi.y, y.hi.y) - std::min(x.lo.y, y.lo.y);
     const double dz = std::max(x.hi.z, y.hi.z) - std::min(x.lo.z, y.lo.z);
     const double area = 2 * (dx * dy + dy * dz + dz * dx);
-    if (!(area > 0) || area > kMaxSceneShare * scene_area_) return false;
+    if (!(area > 0) || area > options_.max_share * scene_area_) return false;
     out = {(items_[a].area + items_[b].area) / area, a, b};
     return out.q > options_.group_threshold;
   }
@@ -395,7 +394,7 @@ class Builder {
         if (!contains(box, items_[i].bounds, eps_) && items_[i].area > box.surface_area()) return;
         members.push_back(static_cast<int>(i));
         box = merged(box, items_[i].bounds);
-        if (box.surface_area() > kMaxSceneShare * scene_area_) return;
+        if (box.surface_area() > options_.max_share * scene_area_) return;
         grew = true;
       }
     }
@@ -403,7 +402,7 @@ class Builder {
       if (object_meets(o, box)) return;
     const Vec3 size = box.size();
     if (std::min({size.x, size.y, size.z}) < 1e3 * eps_) return;  // a flat box holds nothing inside
-    if (box.surface_area() > kMaxSceneShare * scene_area_) return;
+    if (box.surface_area() > options_.max_share * scene_area_) return;
     Item group;
     group.bounds = box;
     group.area = box.surface_area();

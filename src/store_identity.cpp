@@ -32,6 +32,7 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
       {"hierarchy.vp_area_ratio", fmt::format("{}", o.hierarchy.vp_area_ratio)},
       {"hierarchy.vp_grid", std::to_string(o.hierarchy.vp_grid)},
       {"hierarchy.max_depth", std::to_string(o.hierarchy.max_depth)},
+      {"hierarchy.max_share", fmt::format("{}", o.hierarchy.max_share)},
       {"lines.seed", std::to_string(o.lines.seed)},
       {"lines.sequence", o.lines.sequence},
       {"store.chunk_lines", std::to_string(o.store.chunk_lines)},
