@@ -100,20 +100,11 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
     for (uint64_t line = lo; line < hi; ++line) {
       while (line >= first[e + 1]) ++e;
       const int face = emitters[e];
-      const Patch& patch = mesh.patches[mesh.face_patch[face]];
       double power[3];
       for (int c = 0; c < ch; ++c) power[c] = state.emitted_power[state.at(face, c)] / static_cast<double>(counts[e]);
-      const Vec3 n = mesh.face_normal(face);
-      const Vec3 org = uniform_point(mesh, patch, rng);
-      const Vec3 dir = cosine_direction(n, rng);
-      const NearestHit hit = accelerated ? accelerated->nearest_from(mesh.face_patch[face], org, dir)
-                                         : tracer.nearest_from(mesh.face_patch[face], org, dir, tfar);
-      if (hit.patch < 0) {
-        for (int c = 0; c < ch; ++c) a.escaped[c] += power[c];
-      } else {
-        const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
-        receive(state, mesh.patch_faces[hit.patch][side], power, a);
-      }
+      shoot_local_line(mesh, state, face, power, rng, [&](int from, const Vec3& org, const Vec3& dir) {
+        return accelerated ? accelerated->nearest_from(from, org, dir) : tracer.nearest_from(from, org, dir, tfar);
+      }, a);
       ++a.lines;
       if (++since_report == 4096) {
         progress.advance(since_report);

@@ -8,7 +8,9 @@
 
 #include "config.h"
 #include "radiosity_state.h"
+#include "sampling.h"
 #include "tracer.h"
+#include "transport.h"
 
 namespace mpath {
 
@@ -32,6 +34,25 @@ std::vector<double> emitter_crossings(const Options& options, std::vector<double
 std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines);
 
 class SubsceneNearest;
+
+// One local line from `face`: a uniform point of its patch, a cosine-
+// distributed direction; `power` goes to the face the line meets first
+// (`nearest(patch, org, dir)`), escaping when it meets none.
+template <typename Nearest>
+void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int face, const double* power, Rng& rng,
+                      const Nearest& nearest, ShardAccumulator& acc) {
+  const int patch = mesh.face_patch[face];
+  const Vec3 n = mesh.face_normal(face);
+  const Vec3 org = uniform_point(mesh, mesh.patches[patch], rng);
+  const Vec3 dir = cosine_direction(n, rng);
+  const NearestHit hit = nearest(patch, org, dir);
+  if (hit.patch < 0) {
+    for (int c = 0; c < state.channels; ++c) acc.escaped[c] += power[c];
+    return;
+  }
+  const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
+  receive(state, mesh.patch_faces[hit.patch][side], power, acc);
+}
 
 // `accelerated`: find nearest hits through the subscenes' associated patches
 // (first_shot.accelerate) instead of the whole scene's tracer.

@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "error.h"
+#include "first_shot.h"
 #include "progress.h"
 #include "sampling.h"
 
@@ -238,16 +239,8 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
   };
   auto send_face = [&](int face, int from, int dir) {
     if (face < 0) return;
-    const FaceInput& input = in.faces[face];
-    FaceAccumulator& a = acc.faces[face];
-    double fraction = std::min(input.share, allowance - a.quota_used);
-    if (fraction < 0) fraction = 0;
-    a.quota_used += fraction;
     double power[3];
-    for (int c = 0; c < ch; ++c) {
-      power[c] = input.quota[c] * fraction + a.gathered[c];
-      a.gathered[c] = 0;
-    }
+    face_send(in.faces[face], acc.faces[face], allowance, ch, power);
     send_power(from, dir, power);
   };
   const int n = static_cast<int>(m);
@@ -287,14 +280,7 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
           for (int c = 0; c < ch; ++c) acc.absorbed[c] += p[c];
           break;
         }
-        const FaceInput& input = in.faces[face];
-        FaceAccumulator& a = acc.faces[face];
-        for (int c = 0; c < ch; ++c) {
-          const double kept = input.rho[c] * p[c];
-          a.phi_gain[c] += kept;
-          a.gathered[c] += kept;
-          acc.absorbed[c] += p[c] - kept;
-        }
+        face_receive(in.faces[face], acc.faces[face], p, ch, acc.absorbed.data());
         break;
       }
       // A child box: what it stops enters it, the rest goes on.
@@ -469,21 +455,12 @@ uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxS
     for (size_t i = faces.size() * s / shards; i < faces.size() * (s + 1) / shards; ++i) {
       const int face = faces[i];
       Rng rng = make_rng(seed, kUncarriedStream, (static_cast<unsigned long long>(pass) << 32) + face);
-      const Patch& patch = mesh.patches[mesh.face_patch[face]];
-      const Vec3 n = mesh.face_normal(face);
       double power[3];
       for (int c = 0; c < ch; ++c) power[c] = state.unshot[state.at(static_cast<size_t>(face), c)] / kUncarriedLines;
-      for (int k = 0; k < kUncarriedLines; ++k) {
-        const Vec3 org = uniform_point(mesh, patch, rng);
-        const Vec3 dir = cosine_direction(n, rng);
-        const NearestHit hit = tracer.nearest_from(mesh.face_patch[face], org, dir, tfar);
-        if (hit.patch < 0) {
-          for (int c = 0; c < ch; ++c) a.escaped[c] += power[c];
-        } else {
-          const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
-          receive(state, mesh.patch_faces[hit.patch][side], power, a);
-        }
-      }
+      for (int k = 0; k < kUncarriedLines; ++k)
+        shoot_local_line(mesh, state, face, power, rng, [&](int from, const Vec3& org, const Vec3& dir) {
+          return tracer.nearest_from(from, org, dir, tfar);
+        }, a);
     }
   });
   // The shot power leaves its faces' unshot, then the hits are merged in shard order.

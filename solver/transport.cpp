@@ -57,18 +57,10 @@ void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, Shar
 
   auto send_from = [&](int face, int to_hit, bool forward) {
     if (face < 0) return;
-    const FaceInput& input = in.faces[face];
-    FaceAccumulator& a = acc.faces[face];
     Send out{to_hit, forward, {0, 0, 0}};
-    double fraction = std::min(input.share, acc.allowance - a.quota_used);
-    if (fraction < 0) fraction = 0;
-    a.quota_used += fraction;
+    face_send(in.faces[face], acc.faces[face], acc.allowance, ch, out.power);
     bool any = false;
-    for (int c = 0; c < ch; ++c) {
-      out.power[c] = input.quota[c] * fraction + a.gathered[c];
-      a.gathered[c] = 0;
-      any |= out.power[c] != 0;
-    }
+    for (int c = 0; c < ch; ++c) any |= out.power[c] != 0;
     if (any) sends.push_back(out);
   };
 
@@ -88,14 +80,7 @@ void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, Shar
       for (int c = 0; c < ch; ++c) acc.absorbed[c] += out.power[c];
       continue;
     }
-    const FaceInput& input = in.faces[face];
-    FaceAccumulator& a = acc.faces[face];
-    for (int c = 0; c < ch; ++c) {
-      const double kept = input.rho[c] * out.power[c];
-      a.phi_gain[c] += kept;
-      a.gathered[c] += kept;
-      acc.absorbed[c] += out.power[c] - kept;
-    }
+    face_receive(in.faces[face], acc.faces[face], out.power, ch, acc.absorbed.data());
   }
 }
 

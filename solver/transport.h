@@ -2,6 +2,7 @@
 // on a sorted list of patch crossings. Shared by every solver method.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -59,6 +60,30 @@ struct alignas(128) ShardAccumulator {
 
   void reset(size_t face_count);
 };
+
+// What face `input` / `a` sends along one crossing: its share of its quota
+// (never more in all than `allowance` of it) plus what it gathered earlier
+// in the pass, which is then cleared. Shared by every transport.
+inline void face_send(const FaceInput& input, FaceAccumulator& a, double allowance, int ch, double* power) {
+  double fraction = std::min(input.share, allowance - a.quota_used);
+  if (fraction < 0) fraction = 0;
+  a.quota_used += fraction;
+  for (int c = 0; c < ch; ++c) {
+    power[c] = input.quota[c] * fraction + a.gathered[c];
+    a.gathered[c] = 0;
+  }
+}
+
+// Power arriving at a face during a pass: rho of it is accumulated and
+// gathered for sending on, the rest absorbed.
+inline void face_receive(const FaceInput& input, FaceAccumulator& a, const double* power, int ch, double* absorbed) {
+  for (int c = 0; c < ch; ++c) {
+    const double kept = input.rho[c] * power[c];
+    a.phi_gain[c] += kept;
+    a.gathered[c] += kept;
+    absorbed[c] += power[c] - kept;
+  }
+}
 
 // Power arriving at `face` (-1: a black back side) outside a pass (the first
 // shot): rho of it is kept as accumulated and unshot power, the rest absorbed.
