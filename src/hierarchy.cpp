@@ -556,13 +556,12 @@ std::string describe_hierarchy(const Hierarchy& h, const std::vector<uint64_t>& 
 
 namespace mpath {
 
-std::vector<uint64_t> box_line_budget(const Hierarchy& h, const Options::Lines& lines) {
+namespace {
+
+// Lines each box would get before the floor of 4 lines per AR.
+std::vector<double> wanted_lines(const Hierarchy& h, const Options::Lines& lines) {
   const double total = static_cast<double>(lines.total);
-  std::vector<uint64_t> out(h.boxes.size(), 0);
-  if (h.boxes.size() == 1) {
-    out[0] = static_cast<uint64_t>(lines.total);
-    return out;
-  }
+  if (h.boxes.size() == 1) return {total};
   // Paper 3.3.1: root_fraction in the root, the rest by quotient (or objects)...
   const double root = total * lines.root_fraction;
   double weights = 0;
@@ -582,14 +581,47 @@ std::vector<uint64_t> box_line_budget(const Hierarchy& h, const Options::Lines& 
     sum += want[b];
   }
   const double scale = sum > total ? total / sum : 1.0;
-  out[0] = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(want[0] * scale)));
+  for (double& w : want) w *= scale;
+  return want;
+}
+
+void set_ar_offsets(SceneBox& box) {
+  for (int f = 0; f < 6; ++f)
+    box.ar_offset[f + 1] = box.ar_offset[f] + static_cast<uint32_t>(box.grid[f] * box.grid[f] * kArsPerVp);
+}
+
+}  // namespace
+
+std::vector<uint64_t> box_line_budget(const Hierarchy& h, const Options::Lines& lines) {
+  const std::vector<double> want = wanted_lines(h, lines);
+  std::vector<uint64_t> out(h.boxes.size(), 0);
+  out[0] = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(want[0])));
   for (size_t b = 1; b < h.boxes.size(); ++b)
-    out[b] = std::max<uint64_t>(static_cast<uint64_t>(std::llround(want[b] * scale)), 4ull * h.boxes[b].ar_count());
+    out[b] = std::max<uint64_t>(static_cast<uint64_t>(std::llround(want[b])), 4ull * h.boxes[b].ar_count());
   return out;
 }
 
+void fit_vp_grids(Hierarchy& h, const Options::Lines& lines) {
+  const std::vector<double> want = wanted_lines(h, lines);
+  for (size_t b = 1; b < h.boxes.size(); ++b) {
+    SceneBox& box = h.boxes[b];
+    // Halve the finest grid until the box's lines cross each AR 8 times on average.
+    while (4.0 * box.ar_count() > want[b]) {
+      int finest = 0;
+      for (int f = 1; f < 6; ++f)
+        if (box.grid[f] > box.grid[finest]) finest = f;
+      if (box.grid[finest] <= 1) break;
+      const int n = box.grid[finest] / 2;
+      for (int f = 0; f < 6; ++f) box.grid[f] = std::min(box.grid[f], n);
+      set_ar_offsets(box);
+    }
+  }
+}
+
 Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh) {
-  return build_hierarchy(mesh, options.hierarchy, options.solver.method != "hierarchical");
+  Hierarchy h = build_hierarchy(mesh, options.hierarchy, options.solver.method != "hierarchical");
+  if (options.hierarchy.vp_grid <= 0) fit_vp_grids(h, options.lines);
+  return h;
 }
 
 }  // namespace mpath

@@ -51,7 +51,7 @@ struct Hierarchy {
   size_t ar_total() const;
 };
 
-// Builds the hierarchy of `mesh`; `flat` (or hierarchy.max_depth = 0): the
+// Builds the hierarchy of `mesh` (VP grids from vp_area_ratio or vp_grid); `flat` (or hierarchy.max_depth = 0): the
 // root alone. Deterministic for a given mesh and options.
 Hierarchy build_hierarchy(const PatchMesh& mesh, const Options::Hierarchy& options, bool flat);
 
@@ -80,8 +80,14 @@ namespace mpath {
 // so that its transmittances are sampled. With no subscenes the root gets all.
 std::vector<uint64_t> box_line_budget(const Hierarchy& h, const Options::Lines& lines);
 
+// Coarsens the VP grids (vp_area_ratio) of boxes whose lines would cross
+// each AR fewer than 8 times on average (a fine mesh and few lines), so that
+// the floor of 4 lines per AR does not swell the store past lines.total.
+void fit_vp_grids(Hierarchy& h, const Options::Lines& lines);
+
 // The hierarchy a store is made with: subscenes for solver.method =
-// "hierarchical", the root box alone otherwise (design.md section 10).
+// "hierarchical", the root box alone otherwise (design.md section 10), with
+// its VP grids fitted to lines.total unless hierarchy.vp_grid is set.
 Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh);
 
 }  // namespace mpath
