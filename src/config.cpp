@@ -63,6 +63,18 @@ std::string get_string(const toml::node& node, const ValueSource& src) {
   bad_value(src, fmt::format("expected a string, got {}", type_name(node)));
 }
 
+// A string that must be one of `choices`; `what` names it in the error.
+std::string get_choice(const toml::node& node, const ValueSource& src, const char* what,
+                       std::initializer_list<const char*> choices) {
+  std::string v = get_string(node, src);
+  std::string known;
+  for (const char* c : choices) {
+    if (v == c) return v;
+    known += (known.empty() ? "" : ", ") + std::string(c);
+  }
+  bad_value(src, fmt::format("unknown {} '{}' (known: {})", what, v, known));
+}
+
 fs::path get_path(const toml::node& node, const ValueSource& src) {
   fs::path p = get_string(node, src);
   if (p.empty()) bad_value(src, "expected a non-empty path");
@@ -175,11 +187,7 @@ const std::map<std::string, Setter>& setters() {
       {"lines.root_fraction", [](auto& n, auto& s, Options& o) { o.lines.root_fraction = in_range(get_number(n, s), 0.0, 1.0, s); }},
       {"lines.min_density", [](auto& n, auto& s, Options& o) { o.lines.min_density = in_range(get_number(n, s), 0.0, 1e6, s); }},
       {"lines.box_budget",
-       [](auto& n, auto& s, Options& o) {
-         o.lines.box_budget = get_string(n, s);
-         if (o.lines.box_budget != "quotient" && o.lines.box_budget != "objects")
-           bad_value(s, fmt::format("unknown budget '{}' (known: quotient, objects)", o.lines.box_budget));
-       }},
+       [](auto& n, auto& s, Options& o) { o.lines.box_budget = get_choice(n, s, "budget", {"quotient", "objects"}); }},
       {"lines.seed",
        [](auto& n, auto& s, Options& o) {
          const long long v = get_integer(n, s);
@@ -187,32 +195,16 @@ const std::map<std::string, Setter>& setters() {
          o.lines.seed = static_cast<unsigned long long>(v);
        }},
       {"lines.sequence",
-       [](auto& n, auto& s, Options& o) {
-         o.lines.sequence = get_string(n, s);
-         if (o.lines.sequence != "random" && o.lines.sequence != "halton")
-           bad_value(s, fmt::format("unknown sequence '{}' (known: random, halton)", o.lines.sequence));
-       }},
+       [](auto& n, auto& s, Options& o) { o.lines.sequence = get_choice(n, s, "sequence", {"random", "halton"}); }},
       {"first_shot.lines", [](auto& n, auto& s, Options& o) { o.first_shot.lines = positive(get_integer(n, s), s); }},
       {"first_shot.accelerate", [](auto& n, auto& s, Options& o) { o.first_shot.accelerate = get_bool(n, s); }},
       {"first_shot.mode",
-       [](auto& n, auto& s, Options& o) {
-         o.first_shot.mode = get_string(n, s);
-         if (o.first_shot.mode != "auto" && o.first_shot.mode != "local")
-           bad_value(s, fmt::format("unknown mode '{}' (known: auto, local)", o.first_shot.mode));
-       }},
+       [](auto& n, auto& s, Options& o) { o.first_shot.mode = get_choice(n, s, "mode", {"auto", "local"}); }},
       {"solver.adaptive_lines", [](auto& n, auto& s, Options& o) { o.solver.adaptive_lines = get_bool(n, s); }},
       {"solver.schedule",
-       [](auto& n, auto& s, Options& o) {
-         o.solver.schedule = get_string(n, s);
-         if (o.solver.schedule != "v-cycle" && o.solver.schedule != "top-down")
-           bad_value(s, fmt::format("unknown schedule '{}' (known: v-cycle, top-down)", o.solver.schedule));
-       }},
+       [](auto& n, auto& s, Options& o) { o.solver.schedule = get_choice(n, s, "schedule", {"v-cycle", "top-down"}); }},
       {"solver.method",
-       [](auto& n, auto& s, Options& o) {
-         o.solver.method = get_string(n, s);
-         if (o.solver.method != "hierarchical" && o.solver.method != "multipath" && o.solver.method != "classic")
-           bad_value(s, fmt::format("unknown method '{}' (known: hierarchical, multipath, classic)", o.solver.method));
-       }},
+       [](auto& n, auto& s, Options& o) { o.solver.method = get_choice(n, s, "method", {"hierarchical", "multipath", "classic"}); }},
       {"solver.iterations", [](auto& n, auto& s, Options& o) { o.solver.iterations = static_cast<int>(std::min(positive(get_integer(n, s), s), 100000LL)); }},
       {"solver.tolerance", [](auto& n, auto& s, Options& o) { o.solver.tolerance = in_range(get_number(n, s), 0.0, 1.0, s); }},
       {"solver.threads", [](auto& n, auto& s, Options& o) { o.solver.threads = static_cast<int>(in_range(get_integer(n, s), 0, 4096, s)); }},
