@@ -112,7 +112,7 @@ void BoxCounts::resize(size_t patches, size_t wall_ars, size_t child_ars) {
   associated.assign(wall_ars * kAssociated * 2, 0);
 }
 
-void BoxCounts::add(const BoxCounts& o) {
+void BoxCounts::add_counts(const BoxCounts& o) {
   auto sum = [](std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
     if (a.size() != b.size()) throw InputError("box counts of different sizes cannot be added");
     for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
@@ -121,6 +121,10 @@ void BoxCounts::add(const BoxCounts& o) {
   sum(wall_lines, o.wall_lines);
   sum(wall_open, o.wall_open);
   sum(child_crossings, o.child_crossings);
+}
+
+void BoxCounts::add(const BoxCounts& o) {
+  add_counts(o);
   if (associated.size() != o.associated.size()) throw InputError("box counts of different sizes cannot be added");
   std::vector<std::pair<uint64_t, uint32_t>> tallies;
   for (const BoxCounts* c : {static_cast<const BoxCounts*>(this), &o})

@@ -32,6 +32,8 @@ struct BoxCounts {
   // Adds the counts of `other` (another shard of the same box); associated
   // patches are merged by their counts.
   void add(const BoxCounts& other);
+  // The same for the four count arrays alone (not the associated patches).
+  void add_counts(const BoxCounts& other);
   bool operator==(const BoxCounts&) const = default;
 };
 

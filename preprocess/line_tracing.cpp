@@ -11,13 +11,7 @@ constexpr unsigned kStoreLineStream = 5;
 }
 
 void BoxTally::merge_into(BoxTally& total) const {
-  auto sum = [](std::vector<uint32_t>& a, const std::vector<uint32_t>& b) {
-    for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
-  };
-  sum(total.counts.patch_crossings, counts.patch_crossings);
-  sum(total.counts.wall_lines, counts.wall_lines);
-  sum(total.counts.wall_open, counts.wall_open);
-  sum(total.counts.child_crossings, counts.child_crossings);
+  total.counts.add_counts(counts);
   for (const auto& [key, n] : first_met) total.first_met[key] += n;
 }
 
@@ -48,11 +42,6 @@ BoxTally ChunkTracer::empty_tally() const {
   BoxTally t;
   t.counts.resize(box_.patches.size(), box_.ar_count(), child_offset_.back());
   return t;
-}
-
-uint32_t ChunkTracer::local_patch(int patch) const {
-  const auto it = std::lower_bound(box_.patches.begin(), box_.patches.end(), static_cast<uint32_t>(patch));
-  return static_cast<uint32_t>(it - box_.patches.begin());
 }
 
 void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const {
@@ -113,7 +102,7 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
     for (const LineHit& h : hits) {
       while (next_child < children.size() && h.t > 0.5 * (children[next_child].t_in + children[next_child].t_out))
         record.events.push_back(children[next_child++].event);
-      const uint32_t local = h.traced >= 0 ? static_cast<uint32_t>(h.traced) : local_patch(h.patch);
+      const uint32_t local = static_cast<uint32_t>(h.traced);  // the tracer holds the box's patches alone
       record.events.push_back({Event::patch, local, h.along});
       counts.patch_crossings[local]++;
     }

@@ -38,8 +38,6 @@ class ChunkTracer {
   void trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const;
 
  private:
-  uint32_t local_patch(int patch) const;
-
   const PatchMesh& mesh_;
   const Hierarchy& hierarchy_;
   const SceneBox& box_;
