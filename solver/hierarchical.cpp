@@ -470,6 +470,17 @@ uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxS
   return faces.size() * kUncarriedLines;
 }
 
+PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store,
+                           RadiosityState& state, const IterationLog& log, unsigned pass, int threads,
+                           std::vector<BoxPassStats>* per_box, uint64_t* uncarried) {
+  PassStats p = hierarchical_iteration(store, state, pass, threads, line_power(options, store, log),
+                                       options.solver.schedule == "v-cycle", per_box);
+  const uint64_t shot = shoot_uncarried(mesh, tracer, store, state, pass, options.lines.seed, threads);
+  if (uncarried) *uncarried += shot;
+  p.unshot_fraction = state.remaining_fraction();
+  return p;
+}
+
 double line_power(const Options& options, const BoxStore& store, const IterationLog& log) {
   if (!options.solver.adaptive_lines || log.passes.empty() || log.first_unshot <= 0 || store.lines() == 0) return 0.0;
   return log.first_unshot / static_cast<double>(store.lines());

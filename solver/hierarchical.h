@@ -53,6 +53,13 @@ inline constexpr int kUncarriedLines = 16;
 uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, RadiosityState& state,
                          unsigned pass, unsigned long long seed, int threads);
 
+// One iteration of mpath-solve's stored-line methods with the options'
+// schedule and line power: hierarchical_iteration, then shoot_uncarried
+// (its local lines added to `uncarried` when given).
+PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store,
+                           RadiosityState& state, const IterationLog& log, unsigned pass, int threads,
+                           std::vector<BoxPassStats>* per_box = nullptr, uint64_t* uncarried = nullptr);
+
 // A pass takes the n lines of a chunk in the order 0, s, 2s, ... (mod n):
 // the step s, near n times the golden ratio and coprime to n, puts lines far
 // apart in the chunk (which is sorted by what they meet) next to each other.

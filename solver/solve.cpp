@@ -142,11 +142,8 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   if (store) {
     iterate(options, state, iterations,
             [&](unsigned pass) {
-              PassStats p = hierarchical_iteration(*store, state, pass, threads, line_power(options, *store, iterations),
-                                                   options.solver.schedule == "v-cycle", &box_stats);
-              uncarried_lines += shoot_uncarried(mesh, tracer, *store, state, pass, options.lines.seed, threads);
-              p.unshot_fraction = state.remaining_fraction();
-              return p;
+              return stored_iteration(options, mesh, tracer, *store, state, iterations, pass, threads, &box_stats,
+                                      &uncarried_lines);
             }, save);
   } else {
     iterate(options, state, iterations, [&](unsigned pass) {

@@ -155,10 +155,7 @@ StoredSolve solve_stored(const Options& options, const std::function<void(const 
   first_shot(s.mesh, tracer, s.state, options.first_shot.lines, options.lines.seed, options.solver.threads,
              emitter_crossings(options, store.face_crossings(s.mesh.face_count())), accelerated.get());
   iterate(options, s.state, s.log, [&](unsigned pass) {
-    PassStats p = hierarchical_iteration(store, s.state, pass, options.solver.threads, line_power(options, store, s.log),
-                                         options.solver.schedule == "v-cycle");
-    shoot_uncarried(s.mesh, tracer, store, s.state, pass, options.lines.seed, options.solver.threads);
-    p.unshot_fraction = s.state.remaining_fraction();
+    const PassStats p = stored_iteration(options, s.mesh, tracer, store, s.state, s.log, pass, options.solver.threads);
     if (after_each) after_each(s.state);
     return p;
   });
