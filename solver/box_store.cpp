@@ -234,7 +234,9 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
     if (f.first_line != next_line[f.box])
       throw InputError(fmt::format("{}: starts at line {}, expected {} (a shard is missing)", path.string(), f.first_line,
                                    next_line[f.box]));
-    const linestore::BoxFileReader reader(path);
+    // Opened once here to check it; kept as this thread's reader for the passes.
+    auto opened = std::make_unique<linestore::BoxFileReader>(path);
+    const linestore::BoxFileReader& reader = *opened;
     if (reader.box() != f.box || reader.lines() != f.lines)
       throw InputError(fmt::format("{}: does not match the manifest (box or line count differs)", path.string()));
     try {
@@ -247,6 +249,9 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
       box.chunk_lines.push_back(reader.chunks()[c].lines);
     }
     files_.push_back(path);
+    Readers& mine = readers_.local();
+    mine.resize(files_.size());
+    mine.back() = std::move(opened);
     next_line[f.box] += f.lines;
     box.lines += f.lines;
     box.events += f.events;
