@@ -5,11 +5,11 @@
 
 KIND is one of
   room     a room with a table, chairs, a desk and small objects on them, lit by
-           a ceiling lamp in a two-sided lampshade (about 520 polygons);
+           a ceiling lamp in a two-sided lampshade (532 polygons);
   bigroom  groups of chairs and tables, desks and shelves with small objects,
-           one ceiling lamp (about 4,700 polygons);
-  office   an office with desks, chairs, shelves full of books and many small
-           objects, a ceiling lamp and two table lamps (about 31,000 polygons).
+           keyboards, monitors, plants, one ceiling lamp (4,732 polygons);
+  office   an office with desks, keyboards, monitors, shelves and stacks full of books,
+           many small objects, a ceiling lamp and two table lamps (30,728 polygons).
 Every piece of furniture is built of separate objects (a table's top and its
 legs, a chair's seat, back and legs), as modelling tools write them; the
 hierarchy groups them. The lampshades' material is "lampshade" (list it in
@@ -18,6 +18,7 @@ radiance 1 (exact radiosity pi / (1 - RHO) everywhere, for tests).
 """
 import argparse
 import math
+import os
 import random
 
 
@@ -113,6 +114,37 @@ def small_object(s, name, cx, cy, z, rng, segments):
         s.add(name, "ceramic", cylinder(cx, cy, z, z + 0.25, 0.06, 0.03, segments))
 
 
+def keyboard(s, name, x, y, z, rows, cols):
+    """A keyboard: a base and rows x cols separate keys (each its own box)."""
+    pitch = 0.019
+    w, d = cols * pitch + 0.02, rows * pitch + 0.02
+    s.add(name + " base", "metal", box((x, y, z), (x + w, y + d, z + 0.015)))
+    for r in range(rows):
+        for c in range(cols):
+            kx, ky = x + 0.011 + c * pitch, y + 0.011 + r * pitch
+            s.add("%s key %d.%d" % (name, r, c), "plastic", box((kx, ky, z + 0.015), (kx + 0.016, ky + 0.016, z + 0.025)))
+
+
+def monitor(s, name, x, y, z):
+    s.add(name + " foot", "metal", box((x - 0.1, y - 0.08, z), (x + 0.1, y + 0.08, z + 0.01)))
+    s.add(name + " neck", "metal", box((x - 0.02, y, z + 0.01), (x + 0.02, y + 0.03, z + 0.12)))
+    s.add(name + " screen", "plastic", box((x - 0.27, y - 0.02, z + 0.12), (x + 0.27, y + 0.01, z + 0.45)))
+
+
+def plant(s, name, cx, cy, z, rng, leaves):
+    """A pot and `leaves` thin triangular leaves."""
+    s.add(name + " pot", "ceramic", cylinder(cx, cy, z, z + 0.25, 0.1, 0.13, 16))
+    tris = []
+    for k in range(leaves):
+        a = rng.uniform(0, 2 * math.pi)
+        r, top = rng.uniform(0.15, 0.35), z + rng.uniform(0.45, 0.9)
+        base = (cx + 0.02 * math.cos(a), cy + 0.02 * math.sin(a), z + 0.24)
+        side = (cx + 0.03 * math.cos(a + 1.2), cy + 0.03 * math.sin(a + 1.2), z + 0.24)
+        tip = (cx + r * math.cos(a), cy + r * math.sin(a), top)
+        tris.append([base, side, tip])
+    s.add(name + " leaves", "leaf", tris)
+
+
 def ceiling_lamp(s, name, cx, cy, ceiling, segments):
     s.add(name + " cord", "metal", box((cx - 0.01, cy - 0.01, ceiling - 0.5), (cx + 0.01, cy + 0.01, ceiling)))
     s.add(name + " bulb", "bulb", box((cx - 0.05, cy - 0.05, ceiling - 0.62), (cx + 0.05, cy + 0.05, ceiling - 0.5)))
@@ -151,6 +183,8 @@ def make_room(rng):
     chair(s, "desk chair", 0.6, 2.5, "n")
     scatter(s, "on table", 1.6, 1.5, 3.0, 2.4, 0.75, 4, rng, 8)
     scatter(s, "on desk", 0.1, 3.1, 1.5, 3.8, 0.74, 3, rng, 8)
+    shelf(s, "bookshelf", 4.0, d - 0.35, 0.55, 1.4, 0.3, 3, rng, books=True)
+    plant(s, "plant", 4.6, 0.5, 0.0, rng, 12)
     ceiling_lamp(s, "ceiling lamp", 2.3, 1.95, h, 16)
     return s
 
@@ -172,33 +206,42 @@ def make_bigroom(rng):
     for k in range(4):
         desk(s, "desk %d" % k, 0.3 + k * 2.0, d - 0.8)
         chair(s, "desk chair %d" % k, 0.8 + k * 2.0, d - 1.4, "n")
-        scatter(s, "on desk %d" % k, 0.3 + k * 2.0, d - 0.8, 1.7 + k * 2.0, d - 0.1, 0.74, 8, rng, 12)
+        keyboard(s, "keyboard %d" % k, 0.5 + k * 2.0, d - 0.75, 0.74, 4, 12)
+        monitor(s, "monitor %d" % k, 0.8 + k * 2.0, d - 0.3, 0.74)
+        scatter(s, "on desk %d" % k, 1.0 + k * 2.0, d - 0.8, 1.7 + k * 2.0, d - 0.1, 0.74, 6, rng, 12)
     for k in range(3):
-        shelf(s, "shelf %d" % k, 9.0 + k * 0.0, 0.2 + k * 1.2, 1.0, 2.0, 0.35, 5, rng, books=False)
-        scatter(s, "on shelf %d" % k, 9.0, 0.2 + k * 1.2, 10.0, 0.55 + k * 1.2, 2.02, 4, rng, 12)
+        shelf(s, "shelf %d" % k, 9.0, 0.2 + k * 1.2, 1.0, 2.0, 0.35, 5, rng, books=k < 2)
+        scatter(s, "on shelf %d" % k, 9.0, 0.2 + k * 1.2, 10.0, 0.55 + k * 1.2, 2.02, 3, rng, 12)
+    plant(s, "plant 1", 0.5, 0.5, 0.0, rng, 30)
+    plant(s, "plant 2", w - 0.5, d - 0.5, 0.0, rng, 30)
     ceiling_lamp(s, "ceiling lamp", w / 2, d / 2, h, 24)
     return s
 
 
 def make_office(rng):
     s = Scene()
-    w, d, h = 8.0, 6.0, 2.8
+    w, d, h = 14.0, 10.0, 3.0
     shell(s, w, d, h)
-    for k in range(4):
-        x = 0.5 + (k % 2) * 3.6
-        y = 0.6 + (k // 2) * 2.6
+    for k in range(12):
+        x = 0.6 + (k % 4) * 2.5
+        y = 0.6 + (k // 4) * 2.2
         desk(s, "desk %d" % k, x, y, 1.6, 0.8)
         chair(s, "chair %d" % k, x + 0.6, y + 0.95, "n")
-        scatter(s, "on desk %d" % k, x, y, x + 1.6, y + 0.8, 0.74, 12, rng, 24)
-    table_lamp(s, "table lamp 1", 1.9, 0.9, 0.74, 24)
-    table_lamp(s, "table lamp 2", 5.5, 3.5, 0.74, 24)
-    for k in range(6):
-        shelf(s, "bookshelf %d" % k, 0.2 + k * 1.25, d - 0.4, 1.2, 2.2, 0.35, 6, rng, books=True)
-    table(s, "meeting table", 4.8, 2.2, 2.0, 1.0, 0.75)
+        keyboard(s, "keyboard %d" % k, x + 0.3, y + 0.05, 0.74, 5, 16)
+        monitor(s, "monitor %d" % k, x + 0.6, y + 0.6, 0.74)
+        scatter(s, "on desk %d" % k, x + 0.7, y, x + 1.6, y + 0.5, 0.74, 8, rng, 24)
+    table_lamp(s, "table lamp 1", 2.0, 0.9, 0.74, 32)
+    table_lamp(s, "table lamp 2", 7.0, 5.3, 0.74, 32)
+    for k in range(11):  # along the north wall, and a row of stacks in front of it
+        shelf(s, "bookshelf %d" % k, 0.3 + k * 1.25, d - 0.4, 1.2, 2.2, 0.35, 6, rng, books=True)
+        shelf(s, "stack %d" % k, 0.3 + k * 1.25, d - 2.2, 1.2, 2.0, 0.35, 6, rng, books=True)
+    table(s, "meeting table", 11.0, 1.5, 2.0, 1.0, 0.75)
     for i in range(3):
-        chair(s, "meeting chair %d" % i, 4.9 + i * 0.65, 1.6, "s")
-    scatter(s, "on meeting table", 4.8, 2.2, 6.8, 3.2, 0.75, 20, rng, 24)
-    ceiling_lamp(s, "ceiling lamp", w / 2, d / 2, h, 32)
+        chair(s, "meeting chair %d" % i, 11.1 + i * 0.65, 0.9, "s")
+    scatter(s, "on meeting table", 11.0, 1.5, 13.0, 2.5, 0.75, 20, rng, 32)
+    for k, (px, py) in enumerate([(0.4, 7.0), (13.5, 0.5), (13.5, 5.5), (10.6, 4.0)]):
+        plant(s, "plant %d" % k, px, py, 0.0, rng, 40)
+    ceiling_lamp(s, "ceiling lamp", 5.0, 3.5, h, 32)
     return s
 
 
@@ -207,10 +250,12 @@ MATERIALS = {
     "wood": (0.55, 0.4, 0.25), "metal": (0.6, 0.6, 0.62), "fabric": (0.2, 0.3, 0.55),
     "ceramic": (0.8, 0.75, 0.7), "paper0": (0.7, 0.2, 0.15), "paper1": (0.2, 0.5, 0.3),
     "paper2": (0.75, 0.7, 0.4), "lampshade": (0.75, 0.7, 0.6), "bulb": (0.8, 0.8, 0.8),
+    "plastic": (0.25, 0.25, 0.27), "leaf": (0.15, 0.45, 0.12),
 }
 
 
 def write(scene, stem, furnace):
+    os.makedirs(os.path.dirname(stem) or ".", exist_ok=True)
     with open(stem + ".mtl", "w") as m:
         for name, rho in MATERIALS.items():
             if furnace is not None:
