@@ -71,6 +71,18 @@ std::array<double, 3> VertexRadiosity::at(int patch, int side, const Vec3& p) co
 
 Image render_camera(const CameraOptions& cam, const PatchMesh& mesh, const Tracer& tracer,
                     const VertexRadiosity& radiosity, unsigned long long seed) {
+  return render_camera(
+      cam, mesh, tracer,
+      [&](int patch, int side, const Vec3& p) {
+        auto b = radiosity.at(patch, side, p);
+        for (double& c : b) c /= std::numbers::pi;  // radiance of a diffuse surface
+        return b;
+      },
+      seed);
+}
+
+Image render_camera(const CameraOptions& cam, const PatchMesh& mesh, const Tracer& tracer, const Shader& shade,
+                    unsigned long long seed) {
   Image image{cam.width, cam.height, std::vector<float>(static_cast<size_t>(cam.width) * cam.height * 3, 0.0f)};
   const Vec3 forward = normalize(cam.look_at - cam.position);
   const Vec3 right = normalize(cross(forward, cam.up));
@@ -91,12 +103,12 @@ Image render_camera(const CameraOptions& cam, const PatchMesh& mesh, const Trace
         const Patch& p = mesh.patches[hit.patch];
         const int side = dot(p.normal, dir) < 0 ? 0 : 1;
         if (mesh.patch_faces[hit.patch][side] < 0) continue;  // the black back of a one-sided patch
-        const auto b = radiosity.at(hit.patch, side, cam.position + dir * hit.t);
+        const auto b = shade(hit.patch, side, cam.position + dir * hit.t);
         for (int c = 0; c < 3; ++c) sum[c] += b[c];
       }
       for (int c = 0; c < 3; ++c)
         image.rgb[(static_cast<size_t>(y) * cam.width + x) * 3 + c] =
-            static_cast<float>(sum[c] / (cam.samples * std::numbers::pi));
+            static_cast<float>(sum[c] / cam.samples);
     }
   });
   return image;

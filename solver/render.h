@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -34,6 +35,12 @@ class VertexRadiosity {
 
 Image render_camera(const CameraOptions& camera, const PatchMesh& mesh, const Tracer& tracer,
                     const VertexRadiosity& radiosity, unsigned long long seed);
+
+// Any per-point value seen through the camera: the mean of `shade(patch,
+// side, point)` over the pixel's samples (0 where nothing or a black back is hit).
+using Shader = std::function<std::array<double, 3>(int patch, int side, const Vec3& point)>;
+Image render_camera(const CameraOptions& camera, const PatchMesh& mesh, const Tracer& tracer, const Shader& shade,
+                    unsigned long long seed);
 
 // Writes pixel = radiance * 2^exposure as float RGB; `metadata` becomes string attributes.
 void write_exr(const std::filesystem::path& path, const Image& image, double exposure,

@@ -95,8 +95,11 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   const PatchMesh& mesh = prepared.mesh;
   // A stored-line solve checks its store before any work.
   std::unique_ptr<BoxStore> store;
+  double store_seconds = 0;
   if (options.solver.method != "classic") {
+    const auto store_start = clock::now();
     store = std::make_unique<BoxStore>(options, mesh);
+    store_seconds = seconds_since(store_start);
     spdlog::info("store {}: {} box(es), depth {}, {} lines, {} events, {:.1f} MB", options.store.dir.string(),
                  store->box_count(), store->hierarchy().max_depth(), store->lines(), store->events(), store->bytes() / 1e6);
   }
@@ -206,7 +209,8 @@ void run_solve(const Options& options, const SolveFlags& flags) {
                  {"objects", prepared.scene.objects.size()}, {"materials", prepared.scene.materials.size()},
                  {"dropped_polygons", m.dropped_polygons}, {"patches", m.patches.size()}, {"faces", m.face_count()},
                  {"max_patch_area", m.max_patch_area}, {"channels", state.channels}}},
-      {"timings", {{"load", prepared.load_seconds}, {"mesh", prepared.mesh_seconds}, {"bvh", bvh_seconds},
+      {"timings", {{"load", prepared.load_seconds}, {"mesh", prepared.mesh_seconds}, {"store", store_seconds},
+                   {"bvh", bvh_seconds},
                    {"first_shot", shot.seconds}, {"iterations", iteration_seconds}, {"outputs", output_seconds},
                    {"total", seconds_since(start)}}},
       {"first_shot", {{"lines", shot.lines}, {"emitter_faces", shot.emitter_faces},
