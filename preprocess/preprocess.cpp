@@ -247,7 +247,8 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
                                  {"hierarchy_seconds", stats.hierarchy_seconds},
                                  {"trace_seconds", stats.trace_seconds}, {"encode_seconds", stats.encode_seconds},
                                  {"compress_seconds", stats.compress_seconds}, {"write_seconds", stats.write_seconds},
-                                 {"wall_seconds", stats.wall_seconds}, {"threads", threads}, {"boxes", per_box}};
+                                 {"wall_seconds", stats.wall_seconds}, {"threads", threads},
+                                 {"peak_rss_bytes", peak_rss_bytes()}, {"boxes", per_box}};
   {
     const fs::path json_path = dir / (shard.count == 1 ? std::string("preprocess.json")
                                                       : fmt::format("preprocess.part{:04}of{:04}.json", shard.index, shard.count));
