@@ -149,6 +149,9 @@ bool cross_box(const Bounds& box, const Vec3& org, const Vec3& dir, BoxCrossing&
 // three axes, the triangle's normal and the nine edge cross products). Touching
 // counts as not meeting, so polygons lying on a box wall stay outside.
 bool triangle_meets_box(const Vec3& a, const Vec3& b, const Vec3& c, const Bounds& box) {
+  // Most triangles a caller asks about lie clear of the box along an axis.
+  for (int i = 0; i < 3; ++i)
+    if (std::max({a[i], b[i], c[i]}) <= box.lo[i] || std::min({a[i], b[i], c[i]}) >= box.hi[i]) return false;
   const Vec3 center = box.center(), half = box.size() * 0.5;
   const Vec3 v[3] = {a - center, b - center, c - center};
   const Vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
