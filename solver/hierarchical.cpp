@@ -19,6 +19,7 @@ using linestore::kNoAr;
 
 namespace {
 constexpr unsigned kUncarriedStream = 7;  // random stream of the local lines for uncarried power
+constexpr unsigned kLineOrderPurpose = 8;  // + box: the order of a pass through a chunk
 }  // namespace
 
 void add_ar_state(const BoxStore& store, RadiosityState& state) {
@@ -326,24 +327,24 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
     for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) shard_lines += in.parts[i].lines;
     const double allowance = every_line || pass_lines == 0 ? 1.0 : double(shard_lines) / double(pass_lines);
     linestore::DecodedChunk chunk;
+    std::vector<uint32_t> order;
     for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) {
       const uint64_t c = in.parts[i].chunk;
       store.read(b, c, chunk);
       if (!chunk_fits(in, chunk))
         throw InputError(fmt::format("store: box {} chunk {} names patches, boxes or ARs the box does not have "
                                      "(damaged or foreign store); run mpath-preprocess again", b, c));
-      // Stored chunks keep lines sorted by what they meet (it compresses
-      // them); taken in that order, power a face gathers from one line would
-      // leave on the next, nearly the same line, back where it came from,
-      // and pile up in concave parts. A fixed stride through the chunk takes
-      // them in an order unrelated to their geometry (docs/algorithm.md).
+      // A random order (see chunk_line_order); an adaptive pass takes the
+      // first `take` of it, a random subset of the chunk.
       const size_t n = chunk.lines();
-      const size_t stride = line_stride(n);
       const size_t take = std::min<size_t>(n, in.parts[i].lines);
-      for (size_t k = 0, l = 0; k < take; ++k, l = (l + stride) % n)
+      chunk_line_order(pass, b, c, n, order);
+      for (size_t k = 0; k < take; ++k) {
+        const uint32_t l = order[k];
         (ch == 1 ? transport_box_line<1> : transport_box_line<3>)(
             in, chunk.events.data() + chunk.first[l], chunk.first[l + 1] - chunk.first[l], chunk.entry_ar[l],
             chunk.exit_ar[l], a, allowance);
+      }
       progress.advance(take);
     }
   });
@@ -486,11 +487,11 @@ double line_power(const Options& options, const BoxStore& store, const Iteration
   return log.first_unshot / static_cast<double>(store.lines());
 }
 
-size_t line_stride(size_t n) {
-  if (n < 3) return 1;
-  size_t s = static_cast<size_t>(0.6180339887498949 * static_cast<double>(n)) | 1;
-  while (std::gcd(s, n) != 1) s += 2;
-  return s % n;
+void chunk_line_order(unsigned pass, int box, uint64_t chunk, size_t n, std::vector<uint32_t>& order) {
+  order.resize(n);
+  std::iota(order.begin(), order.end(), 0u);
+  Rng rng = make_rng(pass, kLineOrderPurpose + static_cast<unsigned>(box), chunk);
+  std::shuffle(order.begin(), order.end(), rng);
 }
 
 PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, unsigned pass, int threads,

@@ -60,10 +60,12 @@ PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const 
                            RadiosityState& state, const IterationLog& log, unsigned pass, int threads,
                            std::vector<BoxPassStats>* per_box = nullptr, uint64_t* uncarried = nullptr);
 
-// A pass takes the n lines of a chunk in the order 0, s, 2s, ... (mod n):
-// the step s, near n times the golden ratio and coprime to n, puts lines far
-// apart in the chunk (which is sorted by what they meet) next to each other.
-size_t line_stride(size_t n);
+// The order in which pass `pass` takes the n lines of chunk `chunk` of box
+// `box`: a pseudo-random permutation, new every pass. Chunks are stored sorted
+// by what their lines meet; power a face gathers leaves on the next line
+// crossing it, and any order tied to the lines' geometry sends it along a
+// line like the one it came by (docs/algorithm.md, "Line order in a pass").
+void chunk_line_order(unsigned pass, int box, uint64_t chunk, size_t n, std::vector<uint32_t>& order);
 
 // One iteration: MP(root) and, depth by depth, MP of every box. Each box's
 // pass takes every line of the box (exact crossing counts) when

@@ -73,13 +73,16 @@ TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
     for (int s = 0; s < 2; ++s) {
       acc[s].reset(mesh.face_count());
       std::vector<LineHit> hits;
-      for (uint64_t c = records.size() * s / 2; c < records.size() * (s + 1) / 2; ++c)
-        for (size_t i = 0, n = records[c].size(), l = 0; i < n; ++i, l = (l + line_stride(n)) % n) {
+      std::vector<uint32_t> order;
+      for (uint64_t c = records.size() * s / 2; c < records.size() * (s + 1) / 2; ++c) {
+        chunk_line_order(2 * pass, 0, c, records[c].size(), order);  // the root's pass of iteration p is rotation 2p
+        for (uint32_t l : order) {
           const auto& line = records[c][l];
           hits.clear();
           for (const auto& e : line.events) hits.push_back({0.0, static_cast<int>(e.id), e.along});
           transport_line(in, hits, acc[s]);
         }
+      }
     }
     merge_pass(in, acc, in_memory);
   }
