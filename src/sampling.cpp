@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <numbers>
+#include <vector>
 
 namespace mpath {
 
@@ -48,15 +49,30 @@ Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, Rng& rng) {
 
 namespace {
 
-// Digits of `index` in base B mirrored about the radix point; B a constant,
-// so the divisions become multiplications.
-template <unsigned B>
+// Digits of `index` in base B mirrored about the radix point, M digits at a
+// time from a table of the B^M mirrored M-digit numbers: a line's four
+// coordinates took 6 % of preprocessing one digit at a time.
+template <unsigned B, unsigned M>
 double radical_inverse_in(uint64_t index) {
-  constexpr double inv = 1.0 / B;
-  double f = inv, result = 0;
+  static constexpr uint64_t kBlock = [] {
+    uint64_t n = 1;
+    for (unsigned k = 0; k < M; ++k) n *= B;
+    return n;
+  }();
+  static const std::vector<double> table = [] {
+    std::vector<double> t(kBlock);
+    for (uint64_t d = 0; d < kBlock; ++d) {
+      double f = 1.0 / B, v = 0;
+      for (uint64_t x = d; x > 0; x /= B, f /= B) v += f * static_cast<double>(x % B);
+      t[d] = v;
+    }
+    return t;
+  }();
+  constexpr double inv = 1.0 / static_cast<double>(kBlock);
+  double f = 1.0, result = 0;
   while (index > 0) {
-    const uint64_t next = index / B;
-    result += f * static_cast<double>(index - next * B);
+    const uint64_t next = index / kBlock;
+    result += f * table[index - next * kBlock];
     index = next;
     f *= inv;
   }
@@ -77,9 +93,9 @@ double radical_inverse_2(uint64_t v) {
 double radical_inverse(uint64_t index, unsigned base) {
   switch (base) {
     case 2: return radical_inverse_2(index);
-    case 3: return radical_inverse_in<3>(index);
-    case 5: return radical_inverse_in<5>(index);
-    case 7: return radical_inverse_in<7>(index);
+    case 3: return radical_inverse_in<3, 7>(index);
+    case 5: return radical_inverse_in<5, 5>(index);
+    case 7: return radical_inverse_in<7, 4>(index);
     default: {
       const double inv = 1.0 / base;
       double f = inv, result = 0;

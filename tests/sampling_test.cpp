@@ -31,7 +31,7 @@ TEST(Sampling, RadicalInverseMirrorsDigits) {
   EXPECT_NEAR(radical_inverse(5, 3), 7.0 / 9.0, 1e-15);  // 12 -> 0.21
   // The specialised bases give exactly the digit loop of any other base.
   for (unsigned base : {2u, 3u, 5u, 7u})
-    for (uint64_t i : {0ull, 1ull, 12345ull, 4'000'000ull, (1ull << 40) + 977ull}) {
+    for (uint64_t i : {0ull, 1ull, 2186ull, 2187ull, 12345ull, 4'000'000ull, 4'294'967'295ull, (1ull << 40) + 977ull}) {
       double f = 1.0 / base, expected = 0;
       for (uint64_t k = i; k > 0; k /= base, f /= base) expected += f * static_cast<double>(k % base);
       if (base == 2) EXPECT_DOUBLE_EQ(radical_inverse(i, base), expected) << i;
