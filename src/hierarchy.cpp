@@ -232,6 +232,7 @@ class Builder {
       item.area = item.bounds.surface_area();
       if (is_shell(item.bounds)) {
         shell_.push_back(o);  // stays in the root, never grouped
+        shell_bounds_.push_back(item.bounds);
         continue;
       }
       items_.push_back(std::move(item));
@@ -385,6 +386,8 @@ class Builder {
 
   void try_group(const Candidate& c) {
     std::vector<int> members = {c.a, c.b};
+    member_.assign(items_.size(), 0);
+    member_[c.a] = member_[c.b] = 1;
     Bounds box = merged(items_[c.a].bounds, items_[c.b].bounds);
     // Items reaching into the box join it (a cup on a table, a chair pushed
     // under it), the box growing to hold them, unless one is larger than the
@@ -392,17 +395,20 @@ class Builder {
     for (bool grew = true; grew;) {
       grew = false;
       for (size_t i = 0; i < items_.size(); ++i) {
-        if (!items_[i].alive || std::find(members.begin(), members.end(), static_cast<int>(i)) != members.end()) continue;
+        if (!items_[i].alive || member_[i]) continue;
         if (!intrudes(static_cast<int>(i), box)) continue;
         if (!contains(box, items_[i].bounds, eps_) && items_[i].area > box.surface_area()) return;
+        member_[i] = 1;
         members.push_back(static_cast<int>(i));
         box = merged(box, items_[i].bounds);
         if (box.surface_area() > options_.max_share * scene_area_) return;
         grew = true;
       }
     }
-    for (int o : shell_)
-      if (object_meets(o, box)) return;
+    // (A shell object whose bounds stay clear of the box's interior cannot
+    // meet it: the usual case, tested first.)
+    for (size_t k = 0; k < shell_.size(); ++k)
+      if (interiors_overlap(box, shell_bounds_[k], eps_) && object_meets(shell_[k], box)) return;
     const Vec3 size = box.size();
     if (std::min({size.x, size.y, size.z}) < 1e3 * eps_) return;  // a flat box holds nothing inside
     if (box.surface_area() > options_.max_share * scene_area_) return;
@@ -519,7 +525,9 @@ class Builder {
   std::vector<size_t> object_polygons_;
   std::vector<Item> items_;
   std::vector<int> shell_;  // objects of the scene's shell
+  std::vector<Bounds> shell_bounds_;
   std::priority_queue<Candidate> queue_;
+  std::vector<uint8_t> member_;  // try_group's scratch: items in the box being formed
   double eps_ = 0, scene_area_ = 0;
 };
 
