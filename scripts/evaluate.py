@@ -331,9 +331,12 @@ def machine():
 
 
 def commit():
+    """The commit the programs were built from, marked when tracked files other
+    than this driver's own outputs differ from it."""
     try:
         c = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"],
+        dirty = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no", "--", ".",
+                                ":!docs/results.md", ":!docs/benchmarks/results_*", ":!docs/figures/results_*"],
                                capture_output=True, text=True).stdout.strip()
         return c + (" (with uncommitted changes)" if dirty else "")
     except OSError:
@@ -622,6 +625,7 @@ def main():
             sys.exit("evaluate: %s is not built (bash scripts/build)" % os.path.join(BIN, tool))
 
     started = time.time()
+    built_from = commit()  # before any output is written
     meta_path = os.path.join(bench, "results_meta.json")
     if args.report_only:
         runs = read_csv(os.path.join(bench, "results_runs.csv"))
@@ -651,7 +655,7 @@ def main():
         write_csv(os.path.join(bench, "results_runs.csv"), runs)
         write_csv(os.path.join(bench, "results_bias.csv"), list(bias.values()))
         embree = json.load(open(os.path.join(args.work, scenes[0]["name"], "reference-classic", "report.json")))["mpath"]
-        meta = {"date": datetime.date.today().isoformat(), "machine": machine(), "commit": commit(),
+        meta = {"date": datetime.date.today().isoformat(), "machine": machine(), "commit": built_from,
                 "threads": runs[0]["threads"], "embree": embree["embree"], "scenes": scenes,
                 "duration": "%.0f minutes" % ((time.time() - started) / 60), "seeds": args.seeds}
         tmp = meta_path + ".tmp"
