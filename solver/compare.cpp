@@ -226,29 +226,35 @@ void run_compare(const Options& options, const CompareFlags& flags) {
     const Tracer tracer(mesh);
     for (const CameraOptions& cam : options.cameras) {
       // Flat per patch face: the error of each patch as the solver sees it.
-      const Image value = render_camera(
+      // One pass gathers per pixel the error summed over samples that see a
+      // measured face, the share of such samples and the share seeing a
+      // face dark in the reference (the rest see nothing or a black back).
+      const Image sums = render_camera(
           cam, mesh, tracer,
           [&](int patch, int side, const Vec3&) {
             const double e = c.relative[mesh.patch_faces[patch][side]];
-            return std::array<double, 3>{e, e, e};
+            return e >= 0 ? std::array<double, 3>{e, 1, 0} : std::array<double, 3>{0, 0, 1};
           },
           options.lines.seed);
+      Image value{sums.width, sums.height, std::vector<float>(sums.rgb.size())};
+      std::vector<uint8_t> rgb(sums.rgb.size());
+      for (size_t i = 0; i < rgb.size() / 3; ++i) {
+        const double measured = sums.rgb[3 * i + 1], dark = sums.rgb[3 * i + 2];
+        const double v = measured > 0 ? sums.rgb[3 * i] / measured : dark > 0 ? -1.0 : 0.0;
+        const std::array<double, 3> col = colour(std::max(v, 0.0) / flags.scale);
+        for (int k = 0; k < 3; ++k) {
+          value.rgb[3 * i + k] = static_cast<float>(v);
+          // The colour map, grey where the reference is dark, white where nothing is seen.
+          const double mixed = col[k] * measured + 0.5 * dark + (1 - measured - dark);
+          rgb[3 * i + k] = static_cast<uint8_t>(std::lround(255 * std::clamp(mixed, 0.0, 1.0)));
+        }
+      }
       write_exr(flags.out / (cam.name + "_error.exr"), value, 0.0,
                 {{"mpathVersion", MPATH_VERSION},
-                 {"mpathUnits", "relative error |Y - Y_ref| / Y_ref of the patch seen, Y the mean of R, G, B of B - E; "
-                                "negative where Y_ref is below 1e-3 of the mean (dark faces)"},
+                 {"mpathUnits", "relative error |Y - Y_ref| / Y_ref of the patches seen, Y the mean of R, G, B of "
+                                "B - E; -1 where only faces dark in the reference (below 1e-3 of the mean) are seen"},
                  {"mpathResult", result_path.string()},
                  {"mpathReference", reference_path.string()}});
-      // The colour map per pixel; grey where the reference is black, white where nothing is seen.
-      std::vector<uint8_t> rgb(value.rgb.size());
-      const Image seen = render_camera(
-          cam, mesh, tracer, [](int, int, const Vec3&) { return std::array<double, 3>{1, 1, 1}; }, options.lines.seed);
-      for (size_t i = 0; i < rgb.size() / 3; ++i) {
-        const double v = value.rgb[3 * i], coverage = seen.rgb[3 * i];
-        std::array<double, 3> col = v < 0 ? std::array<double, 3>{0.5, 0.5, 0.5} : colour(v / flags.scale);
-        for (int k = 0; k < 3; ++k)
-          rgb[3 * i + k] = static_cast<uint8_t>(std::lround(255 * (col[k] * coverage + (1 - coverage))));
-      }
       write_png_rgb8(flags.out / (cam.name + "_error.png"), value.width, value.height, rgb);
       images.push_back({{"camera", cam.name}, {"exr", cam.name + "_error.exr"}, {"png", cam.name + "_error.png"}});
     }
