@@ -18,21 +18,13 @@
 #include "png_writer.h"
 #include "prepared_scene.h"
 #include "render.h"
+#include "scene_readers.h"
 #include "tracer.h"
 
 namespace mpath {
 namespace {
 
 static_assert(std::endian::native == std::endian::little, "solution.ply is read as native little-endian");
-
-size_t type_size(const std::string& type) {
-  static const std::map<std::string, size_t> sizes = {
-      {"char", 1},  {"uchar", 1},  {"int8", 1},    {"uint8", 1},   {"short", 2},  {"ushort", 2},
-      {"int16", 2}, {"uint16", 2}, {"int", 4},     {"uint", 4},    {"int32", 4},  {"uint32", 4},
-      {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
-  const auto it = sizes.find(type);
-  return it == sizes.end() ? 0 : it->second;
-}
 
 // A viridis-like perceptual map, dark (no error) to yellow (scale and above).
 constexpr std::array<std::array<double, 3>, 5> kColourMap = {{{0.267, 0.005, 0.329},
@@ -95,13 +87,13 @@ SolutionFaces read_solution_ply(const std::filesystem::path& path) {
       if (type == "list") {
         std::string count_type, item_type;
         w >> count_type >> item_type >> name;
-        if (element != "face" || name != "vertex_indices" || count_type != "uchar" || type_size(item_type) != 4)
+        if (element != "face" || name != "vertex_indices" || count_type != "uchar" || ply_type_size(item_type) != 4)
           throw fail("unexpected list property: " + line);
         list_ok = true;
         continue;
       }
       w >> name;
-      const size_t size = type_size(type);
+      const size_t size = ply_type_size(type);
       if (size == 0) throw fail("unknown property type " + type);
       if (element == "vertex") vertex_bytes += size;
       else props.emplace_back(name, size);

@@ -16,6 +16,15 @@
 #include "scene_readers.h"
 
 namespace mpath {
+
+size_t ply_type_size(const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" || t == "float32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -34,14 +43,6 @@ struct Element {
   std::vector<Property> properties;
 };
 
-size_t type_size(const std::string& t) {
-  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
-  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
-  if (t == "int" || t == "uint" || t == "int32" || t == "uint32" || t == "float" || t == "float32") return 4;
-  if (t == "double" || t == "float64") return 8;
-  return 0;
-}
-
 bool is_integer_type(const std::string& t) { return t != "float" && t != "float32" && t != "double" && t != "float64"; }
 
 // Reads scalar values of the element data, ASCII or binary.
@@ -52,7 +53,7 @@ class ValueSource {
   double read(const std::string& type, const std::string& context) {
     if (format_ == Format::ascii) return read_ascii(context);
     unsigned char bytes[8];
-    const size_t n = type_size(type);
+    const size_t n = ply_type_size(type);
     if (!in_.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(n)))
       throw InputError(fmt::format("{}: unexpected end of file in {}", path_, context));
     const bool swap = (format_ == Format::binary_be) == (std::endian::native == std::endian::little);
@@ -127,7 +128,7 @@ Header read_header(std::istream& in, const std::string& path) {
       s >> type;
       if (type == "list") s >> p.count_type >> p.type >> p.name;
       else { p.type = type; s >> p.name; }
-      if (p.name.empty() || type_size(p.type) == 0 || (!p.count_type.empty() && type_size(p.count_type) == 0))
+      if (p.name.empty() || ply_type_size(p.type) == 0 || (!p.count_type.empty() && ply_type_size(p.count_type) == 0))
         throw fail(fmt::format("malformed property '{}'", line));
       h.elements.back().properties.push_back(p);
     } else if (key == "end_header") {

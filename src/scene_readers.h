@@ -12,6 +12,8 @@ namespace mpath {
 
 Scene read_obj(const std::filesystem::path& path);
 Scene read_ply(const std::filesystem::path& path);
+// Bytes of a PLY scalar type ("uchar", "float32", ...); 0 for an unknown one.
+size_t ply_type_size(const std::string& type);
 // `default_sides`: sides of a material without a `sides` entity. `warnings`
 // receives notes on colours clamped into the RGB gamut.
 Scene read_mgf(const std::filesystem::path& path, int curve_segments, int default_sides,
