@@ -249,13 +249,9 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
                                  {"compress_seconds", stats.compress_seconds}, {"write_seconds", stats.write_seconds},
                                  {"wall_seconds", stats.wall_seconds}, {"threads", threads},
                                  {"peak_rss_bytes", peak_rss_bytes()}, {"boxes", per_box}};
-  {
-    const fs::path json_path = dir / (shard.count == 1 ? std::string("preprocess.json")
-                                                      : fmt::format("preprocess.part{:04}of{:04}.json", shard.index, shard.count));
-    AtomicFile file(json_path);
-    file.stream() << timings.dump(2) << "\n";
-    file.commit();
-  }
+  write_text_file(dir / (shard.count == 1 ? std::string("preprocess.json")
+                                          : fmt::format("preprocess.part{:04}of{:04}.json", shard.index, shard.count)),
+                  timings.dump(2) + "\n");
   spdlog::info("{}: {} box file(s), {} lines, {} events, {:.3f} bytes/event on disk ({:.2f} before compression), {:.1f} MB",
                dir.string(), m.files.size(), stats.lines, stats.events,
                stats.events ? double(stats.bytes) / stats.events : 0.0,

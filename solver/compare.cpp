@@ -265,9 +265,7 @@ void run_compare(const Options& options, const CompareFlags& flags) {
       {"relative_error", {{"mean", c.mean_relative}, {"p50", c.p50}, {"p90", c.p90}, {"p99", c.p99}}},
       {"images", images},
       {"colour_map", {{"scale", flags.scale}, {"colours", map}}}};
-  AtomicFile file(flags.out / "compare.json");
-  file.stream() << out.dump(2) << "\n";
-  file.commit();
+  write_text_file(flags.out / "compare.json", out.dump(2) + "\n");
 }
 
 }  // namespace mpath

@@ -77,12 +77,6 @@ json energy_json(const RadiosityState& s) {
                             {"in_transit", held_rgb}}}};
 }
 
-void write_json(const std::filesystem::path& path, const json& j) {
-  AtomicFile file(path);
-  file.stream() << j.dump(2) << "\n";
-  file.commit();
-}
-
 }  // namespace
 
 void run_solve(const Options& options, const SolveFlags& flags) {
@@ -233,7 +227,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
       {"outputs", outputs},
       {"warnings", prepared.warnings},
   };
-  write_json(options.output.dir / "report.json", report);
+  write_text_file(options.output.dir / "report.json", report.dump(2) + "\n");
   spdlog::info("results in {} ({:.2f} s in all)", options.output.dir.string(), seconds_since(start));
 }
 

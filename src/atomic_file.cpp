@@ -17,6 +17,12 @@ fs::path temporary_path(const fs::path& final_path) {
   return final_path.parent_path() / fmt::format(".{}.tmp.{}", final_path.filename().string(), getpid());
 }
 
+void write_text_file(const fs::path& path, const std::string& text) {
+  AtomicFile file(path);
+  file.stream() << text;
+  file.commit();
+}
+
 void commit_temporary(const fs::path& temp, const fs::path& final_path) {
   std::error_code ec;
   fs::rename(temp, final_path, ec);

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <string>
 
 namespace mpath {
 
@@ -28,6 +29,9 @@ class AtomicFile {
   bool committed_ = false;
   int interrupt_slot_ = -1;
 };
+
+// Writes `text` to `path` through an AtomicFile (report.json and the like).
+void write_text_file(const std::filesystem::path& path, const std::string& text);
 
 // Temporary name beside `final_path` for writers that need a path (EXR).
 std::filesystem::path temporary_path(const std::filesystem::path& final_path);
