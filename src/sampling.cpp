@@ -49,9 +49,15 @@ Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, Rng& rng) {
 
 namespace {
 
-// Digits of `index` in base B mirrored about the radix point, M digits at a
-// time from a table of the B^M mirrored M-digit numbers: a line's four
-// coordinates took 6 % of preprocessing one digit at a time.
+// Digits of `index` in base `base` mirrored about the radix point, one at a time.
+double mirrored_digits(uint64_t index, unsigned base) {
+  double f = 1.0 / base, result = 0;
+  for (; index > 0; index /= base, f /= base) result += f * static_cast<double>(index % base);
+  return result;
+}
+
+// The same, M digits at a time from a table of the B^M mirrored M-digit
+// numbers: a line's four coordinates took 6 % of preprocessing one digit at a time.
 template <unsigned B, unsigned M>
 double radical_inverse_in(uint64_t index) {
   static constexpr uint64_t kBlock = [] {
@@ -61,11 +67,7 @@ double radical_inverse_in(uint64_t index) {
   }();
   static const std::vector<double> table = [] {
     std::vector<double> t(kBlock);
-    for (uint64_t d = 0; d < kBlock; ++d) {
-      double f = 1.0 / B, v = 0;
-      for (uint64_t x = d; x > 0; x /= B, f /= B) v += f * static_cast<double>(x % B);
-      t[d] = v;
-    }
+    for (uint64_t d = 0; d < kBlock; ++d) t[d] = mirrored_digits(d, B);
     return t;
   }();
   constexpr double inv = 1.0 / static_cast<double>(kBlock);
@@ -96,16 +98,7 @@ double radical_inverse(uint64_t index, unsigned base) {
     case 3: return radical_inverse_in<3, 7>(index);
     case 5: return radical_inverse_in<5, 5>(index);
     case 7: return radical_inverse_in<7, 4>(index);
-    default: {
-      const double inv = 1.0 / base;
-      double f = inv, result = 0;
-      while (index > 0) {
-        result += f * static_cast<double>(index % base);
-        index /= base;
-        f *= inv;
-      }
-      return result;
-    }
+    default: return mirrored_digits(index, base);
   }
 }
 
