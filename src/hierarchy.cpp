@@ -223,16 +223,17 @@ class Builder {
       for (uint32_t p : object_patches_[o]) polygons.insert(mesh.patches[p].polygon);
       object_polygons_[o] = polygons.size();
     }
+    object_bounds_.resize(objects);
     for (int o = 0; o < objects; ++o) {
       if (object_patches_[o].empty()) continue;
       Item item;
       item.object = o;
       for (uint32_t p : object_patches_[o])
         for (uint32_t v : mesh.patches[p].v) item.bounds.extend(mesh.vertices[v]);
+      object_bounds_[o] = item.bounds;
       item.area = item.bounds.surface_area();
       if (is_shell(item.bounds)) {
         shell_.push_back(o);  // stays in the root, never grouped
-        shell_bounds_.push_back(item.bounds);
         continue;
       }
       items_.push_back(std::move(item));
@@ -362,12 +363,14 @@ class Builder {
 
   // Would a box with these bounds hold polygons of `item` (not a member) in its interior?
   bool intrudes(int item, const Bounds& box) const {
-    if (!interiors_overlap(box, items_[item].bounds, eps_)) return false;
-    if (items_[item].object < 0) return true;  // another box overlapping: never
-    return object_meets(items_[item].object, box);
+    if (items_[item].object >= 0) return object_meets(items_[item].object, box);
+    return interiors_overlap(box, items_[item].bounds, eps_);  // another box overlapping: never
   }
 
   bool object_meets(int object, const Bounds& box) const {
+    // An object whose bounds stay clear of the box's interior (the usual
+    // case) has no polygon in it.
+    if (!interiors_overlap(box, object_bounds_[object], eps_)) return false;
     Bounds inner = box;
     for (int i = 0; i < 3; ++i) {
       inner.lo[i] += eps_;
@@ -405,10 +408,8 @@ class Builder {
         grew = true;
       }
     }
-    // (A shell object whose bounds stay clear of the box's interior cannot
-    // meet it: the usual case, tested first.)
-    for (size_t k = 0; k < shell_.size(); ++k)
-      if (interiors_overlap(box, shell_bounds_[k], eps_) && object_meets(shell_[k], box)) return;
+    for (int o : shell_)
+      if (object_meets(o, box)) return;
     const Vec3 size = box.size();
     if (std::min({size.x, size.y, size.z}) < 1e3 * eps_) return;  // a flat box holds nothing inside
     if (box.surface_area() > options_.max_share * scene_area_) return;
@@ -523,9 +524,9 @@ class Builder {
   Options::Hierarchy options_;
   std::vector<std::vector<uint32_t>> object_patches_;
   std::vector<size_t> object_polygons_;
+  std::vector<Bounds> object_bounds_;
   std::vector<Item> items_;
   std::vector<int> shell_;  // objects of the scene's shell
-  std::vector<Bounds> shell_bounds_;
   std::priority_queue<Candidate> queue_;
   std::vector<uint8_t> member_;  // try_group's scratch: items in the box being formed
   double eps_ = 0, scene_area_ = 0;
