@@ -42,7 +42,7 @@ std::array<double, 3> colour(double t) {
   return c;
 }
 
-double weighted_quantile(std::vector<std::pair<double, double>>& values, double total, double q) {
+double weighted_quantile(const std::vector<std::pair<double, double>>& values, double total, double q) {
   double sum = 0;
   for (const auto& [v, w] : values) {
     sum += w;
@@ -115,10 +115,14 @@ SolutionFaces read_solution_ply(const std::filesystem::path& path) {
   out.area.resize(faces);
   out.radiosity.resize(faces);
   out.exitance.resize(faces);
-  std::vector<char> buf(record + 4 * 255);
-  auto get = [&](const char* name) {
+  std::vector<char> buf(record);
+  // Where each wanted float lies in a face's record (looked up once).
+  const size_t area_at = offset["area"], b_at[3] = {offset["B_r"], offset["B_g"], offset["B_b"]};
+  const size_t e_at[3] = {has_emit ? offset["emit_r"] : 0, has_emit ? offset["emit_g"] : 0,
+                          has_emit ? offset["emit_b"] : 0};
+  auto get = [&](size_t at) {
     float v;
-    std::memcpy(&v, buf.data() + offset[name], sizeof v);
+    std::memcpy(&v, buf.data() + at, sizeof v);
     return v;
   };
   for (size_t f = 0; f < faces; ++f) {
@@ -127,9 +131,9 @@ SolutionFaces read_solution_ply(const std::filesystem::path& path) {
     in.seekg(4 * n, std::ios::cur);
     in.read(buf.data(), static_cast<std::streamsize>(record));
     if (!in) throw InputError(fmt::format("{}: cut short at face {} of {}", path.string(), f, faces));
-    out.area[f] = get("area");
-    out.radiosity[f] = {get("B_r"), get("B_g"), get("B_b")};
-    if (has_emit) out.exitance[f] = {get("emit_r"), get("emit_g"), get("emit_b")};
+    out.area[f] = get(area_at);
+    out.radiosity[f] = {get(b_at[0]), get(b_at[1]), get(b_at[2])};
+    if (has_emit) out.exitance[f] = {get(e_at[0]), get(e_at[1]), get(e_at[2])};
   }
   return out;
 }
