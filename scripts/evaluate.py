@@ -21,6 +21,7 @@ DOCS/results.md, whose numbers all come from those CSVs.
 import argparse
 import csv
 import datetime
+import io
 import json
 import math
 import os
@@ -225,16 +226,22 @@ def speedups(rows, err_h, err_c):
     return out
 
 
+def write_atomically(path, text):
+    """`text` appears under `path` only when whole."""
+    with open(path + ".tmp", "w", newline="") as f:
+        f.write(text)
+    os.replace(path + ".tmp", path)
+
+
 def write_csv(path, rows):
     keys = []
     for r in rows:
         keys += [k for k in r if k not in keys]
-    tmp = path + ".tmp"
-    with open(tmp, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
-        w.writeheader()
-        w.writerows(rows)
-    os.replace(tmp, path)
+    out = io.StringIO()
+    w = csv.DictWriter(out, fieldnames=keys)
+    w.writeheader()
+    w.writerows(rows)
+    write_atomically(path, out.getvalue())
 
 
 def read_csv(path):
@@ -252,10 +259,15 @@ def read_csv(path):
 # --- figures ---------------------------------------------------------------
 
 
-def plot_time_error(rows, scene, title, path_stem):
+def pyplot():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    return plt
+
+
+def plot_time_error(rows, title, path_stem):
+    plt = pyplot()
     panels = (("rel_rms_classic_ref", "relative RMS error (b): against the long classic run"),
               ("rel_rms_own_ref", "relative RMS error (a): against a long run of the same method"),
               ("p50_classic_ref", "median per-patch relative error (b)"))
@@ -281,9 +293,7 @@ def plot_time_error(rows, scene, title, path_stem):
 
 
 def plot_error_images(images, lines, title, path_stem):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
     from matplotlib.colors import LinearSegmentedColormap, Normalize
     methods = [m for m in ("classic", "hierarchical") if m in images]
     if not methods:
@@ -416,7 +426,7 @@ def document(args, runs, speed, memory, bias, figures, meta):
                 fmt_speedup(sp_b[lines], "speedup_total") if lines in sp_b else "-",
                 fmt_speedup(sp_a[lines], "speedup_solve") if lines in sp_a else "-"))
         w("")
-        w(equal_lines(rs, title))
+        w(equal_lines(rs))
         w("")
         w("Other measures against the long classic run (b): the area-weighted MSE of the radiosity ((W/m2)^2, all"
           " faces, emitters included) and the median per-patch relative error (area-weighted; the relative RMS"
@@ -473,7 +483,7 @@ def document(args, runs, speed, memory, bias, figures, meta):
     return "\n".join(L) + "\n"
 
 
-def equal_lines(rows, title):
+def equal_lines(rows):
     """At equal lines, is the hierarchical error (b) above or below classic's?"""
     lower, higher = [], []
     for lines in sorted({r["lines"] for r in rows if r["method"] == "hierarchical"}):
@@ -658,9 +668,7 @@ def main():
         meta = {"date": datetime.date.today().isoformat(), "machine": machine(), "commit": built_from,
                 "threads": runs[0]["threads"], "embree": embree["embree"], "scenes": scenes,
                 "duration": "%.0f minutes" % ((time.time() - started) / 60), "seeds": args.seeds}
-        tmp = meta_path + ".tmp"
-        json.dump(meta, open(tmp, "w"), indent=1)
-        os.replace(tmp, meta_path)
+        write_atomically(meta_path, json.dumps(meta, indent=1))
     # Everything below is drawn from the CSVs just written (or read).
     runs = read_csv(os.path.join(bench, "results_runs.csv"))
     speed = []
@@ -694,7 +702,7 @@ def main():
         for scene in meta["scenes"]:
             rs = [r for r in runs if r["scene"] == scene["name"]]
             stem = os.path.join(figs, "results_time_%s" % scene["name"])
-            plot_time_error(rs, scene["name"], scene["title"], stem)
+            plot_time_error(rs, scene["title"], stem)
             figures["time"][scene["name"]] = os.path.relpath(stem + ".png", args.docs)
             stem = os.path.join(figs, "results_error_%s" % scene["name"])
             if scene["name"] in images:
@@ -704,9 +712,7 @@ def main():
                 figures["images"][scene["name"]] = os.path.relpath(stem + ".png", args.docs)
     text = document(args, runs, speed, memory, bias, figures, meta)
     path = os.path.join(args.docs, "results.md")
-    with open(path + ".tmp", "w") as f:
-        f.write(text)
-    os.replace(path + ".tmp", path)
+    write_atomically(path, text)
     log("wrote %s, %s and the figures in %s" % (path, bench, figs))
 
 
