@@ -15,6 +15,7 @@
 #include "error.h"
 #include "hash.h"
 #include "hierarchy.h"
+#include "line_budget.h"
 #include "line_tracing.h"
 #include "manifest.h"
 #include "mpath_version.h"

@@ -18,13 +18,11 @@
 #include "png_writer.h"
 #include "prepared_scene.h"
 #include "render.h"
-#include "scene_readers.h"
+#include "solution_ply.h"
 #include "tracer.h"
 
 namespace mpath {
 namespace {
-
-static_assert(std::endian::native == std::endian::little, "solution.ply is read as native little-endian");
 
 // A viridis-like perceptual map, dark (no error) to yellow (scale and above).
 constexpr std::array<std::array<double, 3>, 5> kColourMap = {{{0.267, 0.005, 0.329},
@@ -53,90 +51,6 @@ double weighted_quantile(const std::vector<std::pair<double, double>>& values, d
 
 }  // namespace
 
-SolutionFaces read_solution_ply(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(fmt::format("{}: cannot open", path.string()));
-  std::string line;
-  auto fail = [&](const std::string& why) { return InputError(fmt::format("{}: not an mpath solution.ply: {}", path.string(), why)); };
-  if (!std::getline(in, line) || line != "ply") throw fail("no 'ply' magic");
-  size_t vertices = 0, faces = 0;
-  std::string element;
-  bool binary_le = false, list_ok = false;
-  std::vector<std::pair<std::string, size_t>> props;  // face scalar properties after the list
-  size_t vertex_bytes = 0;
-  while (true) {
-    if (!std::getline(in, line)) throw fail("the header has no end_header");
-    if (line == "end_header") break;
-    std::istringstream w(line);
-    std::string word;
-    w >> word;
-    if (word == "format") {
-      std::string f;
-      w >> f;
-      binary_le = f == "binary_little_endian";
-    } else if (word == "element") {
-      w >> element;
-      size_t n = 0;
-      if (!(w >> n)) throw fail("element without a count: " + line);
-      if (element == "vertex") vertices = n;
-      else if (element == "face") faces = n;
-      else throw fail("unexpected element " + element);
-    } else if (word == "property") {
-      std::string type, name;
-      w >> type;
-      if (type == "list") {
-        std::string count_type, item_type;
-        w >> count_type >> item_type >> name;
-        if (element != "face" || name != "vertex_indices" || count_type != "uchar" || ply_type_size(item_type) != 4)
-          throw fail("unexpected list property: " + line);
-        list_ok = true;
-        continue;
-      }
-      w >> name;
-      const size_t size = ply_type_size(type);
-      if (size == 0) throw fail("unknown property type " + type);
-      if (element == "vertex") vertex_bytes += size;
-      else props.emplace_back(name, size);
-    }
-  }
-  if (!binary_le) throw fail("not binary_little_endian");
-  if (!list_ok) throw fail("faces have no vertex_indices list");
-  std::map<std::string, size_t> offset;
-  size_t record = 0;
-  for (const auto& [name, size] : props) {
-    offset[name] = record;
-    record += size;
-  }
-  for (const char* name : {"area", "B_r", "B_g", "B_b"})
-    if (!offset.count(name)) throw fail(std::string("faces have no float property ") + name);
-  const bool has_emit = offset.count("emit_r") && offset.count("emit_g") && offset.count("emit_b");
-  in.seekg(static_cast<std::streamoff>(vertices * vertex_bytes), std::ios::cur);
-  SolutionFaces out;
-  out.area.resize(faces);
-  out.radiosity.resize(faces);
-  out.exitance.resize(faces);
-  std::vector<char> buf(record);
-  // Where each wanted float lies in a face's record (looked up once).
-  const size_t area_at = offset["area"], b_at[3] = {offset["B_r"], offset["B_g"], offset["B_b"]};
-  const size_t e_at[3] = {has_emit ? offset["emit_r"] : 0, has_emit ? offset["emit_g"] : 0,
-                          has_emit ? offset["emit_b"] : 0};
-  auto get = [&](size_t at) {
-    float v;
-    std::memcpy(&v, buf.data() + at, sizeof v);
-    return v;
-  };
-  for (size_t f = 0; f < faces; ++f) {
-    uint8_t n = 0;
-    in.read(reinterpret_cast<char*>(&n), 1);
-    in.seekg(4 * n, std::ios::cur);
-    in.read(buf.data(), static_cast<std::streamsize>(record));
-    if (!in) throw InputError(fmt::format("{}: cut short at face {} of {}", path.string(), f, faces));
-    out.area[f] = get(area_at);
-    out.radiosity[f] = {get(b_at[0]), get(b_at[1]), get(b_at[2])};
-    if (has_emit) out.exitance[f] = {get(e_at[0]), get(e_at[1]), get(e_at[2])};
-  }
-  return out;
-}
 
 Comparison compare_solutions(const SolutionFaces& result, const SolutionFaces& reference) {
   const size_t n = reference.area.size();

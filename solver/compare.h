@@ -10,20 +10,9 @@
 #include <vector>
 
 #include "config.h"
+#include "solution_ply.h"
 
 namespace mpath {
-
-// The per-face values of a solution.ply that a comparison needs.
-struct SolutionFaces {
-  std::vector<float> area;
-  std::vector<std::array<float, 3>> radiosity;
-  std::vector<std::array<float, 3>> exitance;  // emitted; zero when the file has no emit_* properties
-};
-
-// Reads mpath's solution.ply (binary little-endian, any order of face
-// properties as long as area, B_r, B_g, B_b are there); InputError naming the
-// file when it is not one or is cut short.
-SolutionFaces read_solution_ply(const std::filesystem::path& path);
 
 inline constexpr double kDarkFraction = 1e-3;
 

@@ -75,4 +75,10 @@ std::array<double, 3> RadiosityState::rgb(const std::array<double, 3>& v) const 
   return v;
 }
 
+std::vector<SolutionFace> RadiosityState::solution_faces(const PatchMesh& mesh) const {
+  std::vector<SolutionFace> out(faces);
+  for (size_t f = 0; f < faces; ++f) out[f] = {face_rho(f), face_exitance(f), radiosity(mesh, f)};
+  return out;
+}
+
 }  // namespace mpath

@@ -7,6 +7,7 @@
 
 #include "mesh.h"
 #include "scene.h"
+#include "solution_ply.h"
 
 namespace mpath {
 
@@ -41,6 +42,8 @@ struct RadiosityState {
   std::array<double, 3> radiosity(const PatchMesh& mesh, size_t face) const;
   std::array<double, 3> face_rho(size_t face) const;
   std::array<double, 3> face_exitance(size_t face) const;
+  // Every face's reflectance, exitance and radiosity, as solution.ply holds them.
+  std::vector<SolutionFace> solution_faces(const PatchMesh& mesh) const;
   // Per-channel sums, widened to RGB for grey scenes (each channel the same).
   std::array<double, 3> rgb(const std::array<double, 3>& per_channel) const;
 };

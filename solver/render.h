@@ -1,7 +1,7 @@
 // Camera images of a solution: primary visibility with Embree, radiance B/pi
 // interpolated from the vertices of each polygon's patches (smooth across
-// patches, never across polygons), written as float EXR with run metadata and
-// optionally as a tone-mapped PNG preview.
+// patches, never across polygons), and any other per-point value seen
+// through a camera.
 #pragma once
 
 #include <filesystem>
@@ -11,15 +11,11 @@
 #include <vector>
 
 #include "config.h"
+#include "image_writer.h"
 #include "radiosity_state.h"
 #include "tracer.h"
 
 namespace mpath {
-
-struct Image {
-  int width = 0, height = 0;
-  std::vector<float> rgb;  // row-major, top row first
-};
 
 // Area-weighted radiosity of every (vertex, side), for smooth shading.
 class VertexRadiosity {
@@ -41,12 +37,5 @@ Image render_camera(const CameraOptions& camera, const PatchMesh& mesh, const Tr
 using Shader = std::function<std::array<double, 3>(int patch, int side, const Vec3& point)>;
 Image render_camera(const CameraOptions& camera, const PatchMesh& mesh, const Tracer& tracer, const Shader& shade,
                     unsigned long long seed);
-
-// Writes pixel = radiance * 2^exposure as float RGB; `metadata` becomes string attributes.
-void write_exr(const std::filesystem::path& path, const Image& image, double exposure,
-               const std::map<std::string, std::string>& metadata);
-
-// 8-bit sRGB preview of the EXR (radiance * 2^exposure, clipped).
-void write_png(const std::filesystem::path& path, const Image& image, double exposure);
 
 }  // namespace mpath

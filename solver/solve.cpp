@@ -83,14 +83,14 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   const auto start = clock::now();
   const int threads = effective_threads(options);
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  spdlog::info("mpath-solve {} ({}), method {}, {} thread(s)", MPATH_VERSION, MPATH_GIT_COMMIT, options.solver.method, threads);
+  spdlog::info("mpath-solve {} ({}), method {}, {} thread(s)", MPATH_VERSION, MPATH_GIT_COMMIT, to_string(options.solver.method), threads);
 
   PreparedScene prepared = prepare_scene(options);
   const PatchMesh& mesh = prepared.mesh;
   // A stored-line solve checks its store before any work.
   std::unique_ptr<BoxStore> store;
   double store_seconds = 0;
-  if (options.solver.method != "classic") {
+  if (options.solver.method != SolverMethod::classic) {
     const auto store_start = clock::now();
     store = std::make_unique<BoxStore>(options, mesh);
     store_seconds = seconds_since(store_start);
@@ -166,7 +166,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
 
   t = clock::now();
   json outputs = json::array();
-  write_solution_ply(options.output.dir / "solution.ply", mesh, state);
+  write_solution_ply(options.output.dir / "solution.ply", mesh, state.solution_faces(mesh));
   outputs.push_back("solution.ply");
   if (!options.cameras.empty() && (options.output.exr || options.output.png)) {
     const VertexRadiosity vertex_radiosity(mesh, state);
@@ -176,7 +176,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
         write_exr(options.output.dir / (cam.name + ".exr"), image, cam.exposure,
                   {{"mpathVersion", MPATH_VERSION},
                    {"mpathCommit", MPATH_GIT_COMMIT},
-                   {"mpathMethod", options.solver.method},
+                   {"mpathMethod", to_string(options.solver.method)},
                    {"mpathScene", options.scene.file.string()},
                    {"mpathUnits", "radiance W/sr/m2 times 2^exposure"},
                    {"mpathConfig", options_to_json(options)}});

@@ -26,7 +26,7 @@ TEST(Config, ResolvesPathsInTheFileRelativeToTheFile) {
   const Options o = load_options(dir / "sub/run.toml", {});
   EXPECT_EQ(o.scene.file, dir / "sub/scenes/a.obj");
   EXPECT_EQ(o.output.dir, dir / "sub/out");
-  EXPECT_EQ(o.solver.method, "hierarchical");
+  EXPECT_EQ(o.solver.method, SolverMethod::hierarchical);
   EXPECT_EQ(o.lines.total, 1'000'000);
 }
 
@@ -36,7 +36,7 @@ TEST(Config, CommandLineOverridesWinAndTheirPathsAreRelativeToTheWorkingDirector
   const Options o = load_options(dir / "run.toml", {"solver.iterations=7", "output.dir=elsewhere", "solver.method=classic",
                                                      "lines.sequence=random", "mesh.max_patch_area=0.5"});
   EXPECT_EQ(o.solver.iterations, 7);
-  EXPECT_EQ(o.solver.method, "classic");
+  EXPECT_EQ(o.solver.method, SolverMethod::classic);
   EXPECT_EQ(o.lines.sequence, "random");
   EXPECT_DOUBLE_EQ(o.mesh.max_patch_area, 0.5);
   EXPECT_EQ(o.output.dir, std::filesystem::current_path() / "elsewhere");

@@ -98,7 +98,7 @@ Scene furnished_room(double rho, double radiance) {
 
 TEST(Hierarchy, TwoFarApartTablesBuildTwoSubscenesAndALonePolygonNone) {
   const PatchMesh mesh = build_mesh(furnished_room(0.5, 0), 0.05);
-  const Hierarchy h = build_hierarchy(mesh, Options::Hierarchy{}, false);
+  const Hierarchy h = build_hierarchy(mesh, HierarchyOptions{}, false);
   ASSERT_EQ(h.boxes.size(), 3u) << describe_hierarchy(h, {});
   EXPECT_EQ(h.boxes[0].children.size(), 2u);
   EXPECT_EQ(h.boxes[0].objects.size(), 7u);  // six walls and the poster
@@ -122,8 +122,8 @@ TEST(Hierarchy, TwoFarApartTablesBuildTwoSubscenesAndALonePolygonNone) {
           << "patch " << p << " in box " << b;
     }
   // Flat (or max_depth 0): the root alone.
-  EXPECT_EQ(build_hierarchy(mesh, Options::Hierarchy{}, true).boxes.size(), 1u);
-  Options::Hierarchy shallow;
+  EXPECT_EQ(build_hierarchy(mesh, HierarchyOptions{}, true).boxes.size(), 1u);
+  HierarchyOptions shallow;
   shallow.max_depth = 0;
   EXPECT_EQ(build_hierarchy(mesh, shallow, false).boxes.size(), 1u);
 }
@@ -135,7 +135,7 @@ TEST(Hierarchy, OneObjectForTheWholeSceneIsSplitIntoItsConnectedParts) {
   for (Polygon& p : scene.polygons) p.object = 0;
   scene.objects.resize(1);
   const PatchMesh mesh = build_mesh(scene, 0.05);
-  const Hierarchy h = build_hierarchy(mesh, Options::Hierarchy{}, false);
+  const Hierarchy h = build_hierarchy(mesh, HierarchyOptions{}, false);
   ASSERT_EQ(h.boxes.size(), 3u) << describe_hierarchy(h, {});
   for (int b : h.boxes[0].children) {
     EXPECT_EQ(h.boxes[b].objects.size(), 5u);  // a top and four legs, as parts
@@ -150,7 +150,7 @@ TEST(Hierarchy, ARoomWithALonePanelGetsNoSubscene) {
   test::add_box(scene, {0, 0, 0}, {3, 3, 3}, true, m, test::add_object(scene, "room"));
   test::add_quad(scene, {1, 1, 1}, {2, 1, 1}, {2, 2, 1}, {1, 2, 1}, m, test::add_object(scene, "panel"));
   const PatchMesh mesh = build_mesh(scene, 0.1);
-  EXPECT_EQ(build_hierarchy(mesh, Options::Hierarchy{}, false).boxes.size(), 1u);
+  EXPECT_EQ(build_hierarchy(mesh, HierarchyOptions{}, false).boxes.size(), 1u);
 }
 
 // Transmittances of a box from its own lines, traced as mpath-preprocess does.
@@ -341,7 +341,7 @@ std::pair<double, double> furnace_errors(bool accelerate, double rho, double exi
   o.first_shot.mode = "local";  // every emitter shot by local lines, through the subscenes
   o.scene.file = test::write_obj(furnished_room(rho, exitance / std::numbers::pi), dir / "room");
   o.store.dir = dir / "store";
-  o.solver.method = "hierarchical";
+  o.solver.method = SolverMethod::hierarchical;
   o.solver.iterations = 30;
   o.solver.tolerance = 1e-4;
   double worst_residual = 0;
@@ -501,7 +501,7 @@ TEST(HierarchicalPrograms, Office2IsWithinTheMeasuredBoundOfALongClassicRun) {
   // Area-weighted relative RMS over faces, from the two solution.ply files.
   std::vector<std::string> warnings;
   Options o = load_options(config, {});
-  const PatchMesh mesh = build_mesh(load_scene(o, warnings), o.mesh.max_patch_area);
+  const PatchMesh mesh = build_mesh(load_scene(o.scene, o.mesh.curve_segments, warnings), o.mesh.max_patch_area);
   auto radiosity = [&](const std::filesystem::path& ply) {
     // Face properties follow the vertex indices: area, rho x3, emit x3, B x3, polygon, object.
     const std::string data = test::read_file(ply);

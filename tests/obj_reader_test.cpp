@@ -81,18 +81,18 @@ TEST(SceneLoader, AppliesConfigEmittersAndTwoSidedMaterialsByName) {
   TempDir dir;
   write_file(dir / "s.mtl", kMtl);
   write_file(dir / "s.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl wall\nf 1 2 3\n");
-  Options o;
-  o.scene.file = dir / "s.obj";
-  o.scene.emitters["wall"] = {1, 2, 3};
-  o.scene.two_sided = {"wall"};
+  SceneOptions o;
+  o.file = dir / "s.obj";
+  o.emitters["wall"] = {1, 2, 3};
+  o.two_sided = {"wall"};
   std::vector<std::string> warnings;
-  const Scene s = load_scene(o, warnings);
+  const Scene s = load_scene(o, 16, warnings);
   const Material& wall = s.materials[s.find_material("wall")];
   EXPECT_EQ(wall.emission, (Rgb{1, 2, 3}));
   EXPECT_TRUE(wall.two_sided);
-  o.scene.emitters["ghost"] = {1, 1, 1};
+  o.emitters["ghost"] = {1, 1, 1};
   try {
-    load_scene(o, warnings);
+    load_scene(o, 16, warnings);
     FAIL() << "an unknown material in scene.emitters must be an error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("'scene.emitters.ghost': unknown material 'ghost'"), std::string::npos) << e.what();
@@ -101,21 +101,22 @@ TEST(SceneLoader, AppliesConfigEmittersAndTwoSidedMaterialsByName) {
 
 TEST(SceneLoader, RejectsUnknownFormatsMissingFilesAndDarkScenes) {
   TempDir dir;
-  Options o;
-  o.scene.file = dir / "s.xyz";
+  SceneOptions o;
+  o.file = dir / "s.xyz";
   std::vector<std::string> w;
-  write_file(o.scene.file, "x");
-  EXPECT_THROW(load_scene(o, w), InputError);
-  o.scene.file = dir / "absent.obj";
+  write_file(o.file, "x");
+  EXPECT_THROW(load_scene(o, 16, w), InputError);
+  o.file = dir / "absent.obj";
   try {
-    load_scene(o, w);
+    load_scene(o, 16, w);
+    FAIL() << "a missing scene file must be an error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("absent.obj: file not found"), std::string::npos);
   }
   write_file(dir / "dark.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-  o.scene.file = dir / "dark.obj";
+  o.file = dir / "dark.obj";
   try {
-    load_scene(o, w);
+    load_scene(o, 16, w);
     FAIL() << "a scene without emitters must be an error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no emitting polygon"), std::string::npos);

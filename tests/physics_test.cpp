@@ -102,7 +102,7 @@ TEST(EnergyBalance, ClosesInTheOpenCornellBoxWherePowerEscapes) {
   Options o = test_options(500'000, 200'000, 0.002);
   o.scene.file = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box/cornell_box.obj";
   std::vector<std::string> warnings;
-  const Scene scene = load_scene(o, warnings);
+  const Scene scene = load_scene(o.scene, o.mesh.curve_segments, warnings);
   const auto s = solve_classic_in_memory(scene, o);
   ASSERT_EQ(s.state.channels, 3);
   for (int c = 0; c < 3; ++c) {

@@ -39,12 +39,12 @@ TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
   o.scene.file = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box/cornell_box.obj";
   o.store.chunk_lines = 4096;
   o.store.dir = dir.path();
-  o.solver.method = "multipath";
+  o.solver.method = SolverMethod::multipath;
   o.solver.iterations = 3;
   ASSERT_EQ(preprocess("store.dir=" + dir.path().string() + " mesh.max_patch_area=0.002 solver.threads=2 lines.sequence=random").exit_code, 0);
 
   std::vector<std::string> warnings;
-  const Scene scene = load_scene(o, warnings);
+  const Scene scene = load_scene(o.scene, o.mesh.curve_segments, warnings);
   const PatchMesh mesh = build_mesh(scene, o.mesh.max_patch_area);
   const Tracer tracer(mesh);
   const BoxStore store(o, mesh);

@@ -1,5 +1,7 @@
 #include "test_util.h"
 
+#include "prepared_scene.h"
+
 #include "accelerated_shot.h"
 #include "box_store.h"
 #include "hierarchical.h"
@@ -142,9 +144,9 @@ std::filesystem::path write_obj(const Scene& scene, const std::filesystem::path&
 StoredSolve solve_stored(const Options& options, const std::function<void(const RadiosityState&)>& after_each) {
   run_preprocess(options, ShardSpec{});
   StoredSolve s;
-  std::vector<std::string> warnings;
-  const Scene scene = load_scene(options, warnings);
-  s.mesh = build_mesh(scene, options.mesh.max_patch_area);
+  PreparedScene prepared = prepare_scene(options);
+  const Scene& scene = prepared.scene;
+  s.mesh = std::move(prepared.mesh);
   const BoxStore store(options, s.mesh);
   s.boxes = store.box_count();
   const Tracer tracer(s.mesh);
@@ -167,7 +169,7 @@ Options test_options(long long global_lines, long long local_lines, double max_p
   o.lines.total = global_lines;
   o.first_shot.lines = local_lines;
   o.mesh.max_patch_area = max_patch_area;
-  o.solver.method = "classic";
+  o.solver.method = SolverMethod::classic;
   o.solver.threads = 2;
   o.lines.sequence = "random";  // the noise model of the physics tests is for independent lines
   return o;

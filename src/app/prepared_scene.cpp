@@ -1,0 +1,31 @@
+#include "prepared_scene.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+
+#include "scene_readers.h"
+
+namespace mpath {
+
+PreparedScene prepare_scene(const Options& options) {
+  using clock = std::chrono::steady_clock;
+  PreparedScene out;
+  auto t0 = clock::now();
+  out.scene = load_scene(options.scene, options.mesh.curve_segments, out.warnings);
+  auto t1 = clock::now();
+  out.mesh = build_mesh(out.scene, options.mesh.max_patch_area);
+  auto t2 = clock::now();
+  out.load_seconds = std::chrono::duration<double>(t1 - t0).count();
+  out.mesh_seconds = std::chrono::duration<double>(t2 - t1).count();
+  if (out.mesh.dropped_polygons > 0)
+    out.warnings.push_back(fmt::format("{} degenerate polygon(s) (no area) dropped", out.mesh.dropped_polygons));
+  for (const auto& w : out.warnings) spdlog::warn("{}", w);
+  spdlog::info("scene {}: {} polygons, {} objects, {} materials", options.scene.file.string(), out.scene.polygons.size(),
+               out.scene.objects.size(), out.scene.materials.size());
+  spdlog::info("mesh: {} patches, {} faces, max patch area {:.4g}{}", out.mesh.patches.size(), out.mesh.face_count(),
+               out.mesh.max_patch_area, options.mesh.max_patch_area > 0 ? "" : " (automatic)");
+  return out;
+}
+
+}  // namespace mpath

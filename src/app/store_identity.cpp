@@ -1,0 +1,49 @@
+#include "store_identity.h"
+
+#include "hash.h"
+#include "line_budget.h"
+
+namespace mpath {
+
+std::string mesh_hash(const PatchMesh& mesh) {
+  Fnv1a h;
+  for (const Vec3& v : mesh.vertices) h.add(&v, sizeof v);
+  for (const Patch& p : mesh.patches) h.add(p.v.data(), sizeof p.v);
+  for (const auto& f : mesh.patch_faces) h.add(f.data(), sizeof f);
+  return hex64(h.value());
+}
+
+std::map<std::string, std::string> store_identity(const Options& o, const PatchMesh& mesh) {
+  std::string two_sided;
+  for (const auto& name : o.scene.two_sided) two_sided += (two_sided.empty() ? "" : ",") + name;
+  return {
+      {"scene.file_hash", hash_file(o.scene.file)},
+      {"mesh.hash", mesh_hash(mesh)},
+      {"mesh.faces", std::to_string(mesh.face_count())},
+      {"mesh.max_patch_area", fmt::format("{}", o.mesh.max_patch_area)},
+      {"mesh.curve_segments", std::to_string(o.mesh.curve_segments)},
+      {"scene.two_sided", two_sided},
+      {"scene.mgf_default_sides", std::to_string(o.scene.mgf_default_sides)},
+      {"lines.total", std::to_string(o.lines.total)},
+      {"lines.root_fraction", fmt::format("{}", o.lines.root_fraction)},
+      {"lines.box_budget", o.lines.box_budget},
+      {"lines.min_density", fmt::format("{}", o.lines.min_density)},
+      {"hierarchy.subscenes", o.solver.method == SolverMethod::hierarchical ? "yes" : "no (solver.method = multipath)"},
+      {"hierarchy.group_threshold", fmt::format("{}", o.hierarchy.group_threshold)},
+      {"hierarchy.vp_area_ratio", fmt::format("{}", o.hierarchy.vp_area_ratio)},
+      {"hierarchy.vp_grid", std::to_string(o.hierarchy.vp_grid)},
+      {"hierarchy.max_depth", std::to_string(o.hierarchy.max_depth)},
+      {"hierarchy.max_share", fmt::format("{}", o.hierarchy.max_share)},
+      {"lines.seed", std::to_string(o.lines.seed)},
+      {"lines.sequence", o.lines.sequence},
+      {"store.chunk_lines", std::to_string(o.store.chunk_lines)},
+  };
+}
+
+Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh) {
+  Hierarchy h = build_hierarchy(mesh, options.hierarchy, options.solver.method != SolverMethod::hierarchical);
+  if (options.hierarchy.vp_grid <= 0) fit_vp_grids(h, options.lines);
+  return h;
+}
+
+}  // namespace mpath

@@ -1,0 +1,25 @@
+// What a line store depends on: the scene file, the mesh made from it, and the
+// config values that decide the lines. mpath-preprocess records it in the
+// manifest; mpath-solve recomputes it and refuses a store that differs.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "config.h"
+#include "hierarchy.h"
+#include "mesh.h"
+
+namespace mpath {
+
+std::map<std::string, std::string> store_identity(const Options& options, const PatchMesh& mesh);
+
+// Hash of the mesh's geometry and faces (catches changes in included files too).
+std::string mesh_hash(const PatchMesh& mesh);
+
+// The hierarchy a store is made with: subscenes for solver.method =
+// "hierarchical", the root box alone otherwise (docs/user-guide.md), with
+// its VP grids fitted to lines.total unless hierarchy.vp_grid is set.
+Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh);
+
+}  // namespace mpath

@@ -1,0 +1,106 @@
+// The one options struct of mpath, loaded from a TOML config file with
+// command-line key=value overrides, validated key by key.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "hierarchy_options.h"
+#include "scene_readers.h"
+#include "vec3.h"
+
+namespace mpath {
+
+struct CameraOptions {
+  std::string name = "camera";
+  Vec3 position{0, 0, 1};
+  Vec3 look_at{0, 0, 0};
+  Vec3 up{0, 1, 0};
+  double fov_deg = 40.0;      // vertical field of view
+  int width = 512;
+  int height = 512;
+  int samples = 4;            // jittered primary rays per pixel
+  double exposure = 0.0;      // pixel = radiance * 2^exposure
+};
+
+// How mpath-solve solves (solver.method).
+enum class SolverMethod {
+  hierarchical,  // stored lines of the hierarchy of subscenes
+  multipath,     // stored lines of the root box alone
+  classic,       // fresh global lines traced on the fly, no store
+};
+const char* to_string(SolverMethod method);
+
+struct Options {
+  std::filesystem::path config_file;
+
+  using Scene = SceneOptions;
+  Scene scene;
+
+  struct Mesh {
+    double max_patch_area = 0.0;  // 0: automatic, scene box area / 2000
+    int curve_segments = 16;      // MGF curved primitives: segments around a circle
+  } mesh;
+
+  using Hierarchy = HierarchyOptions;
+  Hierarchy hierarchy;
+
+  using Lines = LineOptions;
+  Lines lines;
+
+  struct FirstShot {
+    long long lines = 1'000'000;
+    bool accelerate = false;
+    // "auto": an emitter face that the first pass of global lines crosses more
+    // often than it would get local lines is shot by the global lines;
+    // "local": every emitter face is shot with local lines.
+    std::string mode = "auto";
+  } first_shot;
+
+  struct Solver {
+    SolverMethod method = SolverMethod::hierarchical;
+    int iterations = 10;
+    double tolerance = 1e-3;
+    // Stored-line methods: later iterations stream a share of each box's
+    // lines in proportion to the power left (docs/algorithm.md).
+    bool adaptive_lines = true;
+    // Order of the box passes in an iteration: "v-cycle" (subscenes deepest
+    // first, the root, then top-down) or "top-down" (MP(root) of paper figure 5).
+    std::string schedule = "v-cycle";
+    int threads = 0;  // 0: all hardware threads
+  } solver;
+
+  struct Store {
+    std::filesystem::path dir = "store";
+    int chunk_lines = 65536;  // lines per compressed chunk
+    int zstd_level = 6;       // zstd compression level of chunks
+  } store;
+
+  struct Output {
+    std::filesystem::path dir = "results";
+    bool exr = true;  // an EXR per camera
+    bool png = true;  // and a tone-mapped PNG preview beside it
+  } output;
+
+  std::vector<CameraOptions> cameras;
+};
+
+// Loads `config_path` and applies `overrides` ("dotted.key=value"). Paths in the
+// file are relative to the file; paths given on the command line are relative
+// to the working directory. Throws InputError naming the key on any problem.
+Options load_options(const std::filesystem::path& config_path,
+                     const std::vector<std::string>& overrides);
+
+// The effective configuration as TOML text (for --print-config and logs).
+std::string options_to_toml(const Options& options);
+
+// The effective configuration as JSON text (for report.json).
+std::string options_to_json(const Options& options);
+
+// Number of worker threads the options ask for.
+int effective_threads(const Options& options);
+
+}  // namespace mpath

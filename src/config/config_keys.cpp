@@ -1,0 +1,336 @@
+#include "config_keys.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "error.h"
+
+namespace mpath {
+namespace {
+
+namespace fs = std::filesystem;
+
+[[noreturn]] void bad_value(const ValueSource& src, const std::string& what) {
+  throw InputError(fmt::format("{}: config key '{}': {}", src.where, src.key, what));
+}
+
+const char* type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a number";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::table: return "a table";
+    default: return "a date or time";
+  }
+}
+
+double get_number(const toml::node& node, const ValueSource& src) {
+  if (auto v = node.value_exact<double>()) {
+    if (!std::isfinite(*v)) bad_value(src, "expected a finite number");
+    return *v;
+  }
+  if (auto v = node.value_exact<int64_t>()) return static_cast<double>(*v);
+  bad_value(src, fmt::format("expected a number, got {}", type_name(node)));
+}
+
+long long get_integer(const toml::node& node, const ValueSource& src) {
+  if (auto v = node.value_exact<int64_t>()) return *v;
+  bad_value(src, fmt::format("expected an integer, got {}", type_name(node)));
+}
+
+bool get_bool(const toml::node& node, const ValueSource& src) {
+  if (auto v = node.value_exact<bool>()) return *v;
+  bad_value(src, fmt::format("expected true or false, got {}", type_name(node)));
+}
+
+std::string get_string(const toml::node& node, const ValueSource& src) {
+  if (auto v = node.value_exact<std::string>()) return *v;
+  bad_value(src, fmt::format("expected a string, got {}", type_name(node)));
+}
+
+// A string that must be one of `choices`; `what` names it in the error.
+std::string get_choice(const toml::node& node, const ValueSource& src, const char* what,
+                       std::initializer_list<const char*> choices) {
+  std::string v = get_string(node, src);
+  std::string known;
+  for (const char* c : choices) {
+    if (v == c) return v;
+    known += (known.empty() ? "" : ", ") + std::string(c);
+  }
+  bad_value(src, fmt::format("unknown {} '{}' (known: {})", what, v, known));
+}
+
+fs::path get_path(const toml::node& node, const ValueSource& src) {
+  fs::path p = get_string(node, src);
+  if (p.empty()) bad_value(src, "expected a non-empty path");
+  return p.is_absolute() ? p : (src.base_dir / p).lexically_normal();
+}
+
+Vec3 get_vec3(const toml::node& node, const ValueSource& src) {
+  const toml::array* arr = node.as_array();
+  if (!arr || arr->size() != 3)
+    bad_value(src, fmt::format("expected an array of 3 numbers, got {}", type_name(node)));
+  Vec3 v;
+  for (int i = 0; i < 3; ++i) v[i] = get_number(*arr->get(i), src);
+  return v;
+}
+
+long long positive(long long v, const ValueSource& src) {
+  if (v <= 0) bad_value(src, fmt::format("expected a positive integer, got {}", v));
+  return v;
+}
+
+double in_range(double v, double lo, double hi, const ValueSource& src) {
+  if (!(v >= lo && v <= hi)) bad_value(src, fmt::format("expected a value in [{}, {}], got {}", lo, hi, v));
+  return v;
+}
+
+Rgb get_rgb(const toml::node& node, const ValueSource& src) {
+  if (node.is_number()) {
+    const double g = get_number(node, src);
+    if (g < 0) bad_value(src, "emitted radiance must not be negative");
+    return {g, g, g};
+  }
+  const Vec3 v = get_vec3(node, src);
+  if (v.x < 0 || v.y < 0 || v.z < 0) bad_value(src, "emitted radiance must not be negative");
+  return {v.x, v.y, v.z};
+}
+
+CameraOptions get_camera(const toml::table& table, const ValueSource& parent, size_t index) {
+  CameraOptions cam;
+  cam.name = fmt::format("camera{}", index);
+  for (const auto& [k, node] : table) {
+    ValueSource src = parent;
+    src.key = fmt::format("{}[{}].{}", parent.key, index, std::string(k.str()));
+    const std::string key(k.str());
+    if (key == "name") cam.name = get_string(node, src);
+    else if (key == "position") cam.position = get_vec3(node, src);
+    else if (key == "look_at") cam.look_at = get_vec3(node, src);
+    else if (key == "up") cam.up = get_vec3(node, src);
+    else if (key == "fov_deg") cam.fov_deg = in_range(get_number(node, src), 1.0, 179.0, src);
+    else if (key == "width") cam.width = static_cast<int>(std::min(positive(get_integer(node, src), src), 16384LL));
+    else if (key == "height") cam.height = static_cast<int>(std::min(positive(get_integer(node, src), src), 16384LL));
+    else if (key == "samples") cam.samples = static_cast<int>(std::min(positive(get_integer(node, src), src), 4096LL));
+    else if (key == "exposure") cam.exposure = get_number(node, src);
+    else bad_value(src, "unknown key");
+  }
+  if (length(cam.look_at - cam.position) == 0.0) bad_value(parent, "camera position equals look_at");
+  if (length(cross(cam.look_at - cam.position, cam.up)) == 0.0) bad_value(parent, "camera up is parallel to the view direction");
+  return cam;
+}
+
+SolverMethod get_method(const toml::node& node, const ValueSource& src) {
+  const std::string name = get_choice(node, src, "method", {"hierarchical", "multipath", "classic"});
+  return name == "hierarchical" ? SolverMethod::hierarchical
+         : name == "multipath"  ? SolverMethod::multipath
+                                : SolverMethod::classic;
+}
+
+// A one-element array holding `value` (toml::array{an_array} would copy the
+// array instead of nesting it).
+template <typename T>
+toml::array one(T&& value) {
+  toml::array out;
+  out.push_back(std::forward<T>(value));
+  return out;
+}
+
+toml::array vec_to_toml(const Vec3& v) { return toml::array{v.x, v.y, v.z}; }
+
+toml::table camera_table(const CameraOptions& c) {
+  return toml::table{{"name", c.name}, {"position", vec_to_toml(c.position)}, {"look_at", vec_to_toml(c.look_at)},
+                     {"up", vec_to_toml(c.up)}, {"fov_deg", c.fov_deg}, {"width", c.width}, {"height", c.height},
+                     {"samples", c.samples}, {"exposure", c.exposure}};
+}
+
+// A row's reader and printer: `o` is the options, `n` the TOML value and `s` where it came from.
+#define SET(...) [](const toml::node& n, const ValueSource& s, Options& o) { __VA_ARGS__; }
+#define GET(...) [](const Options& o) { return toml::array{__VA_ARGS__}; }
+
+std::vector<ConfigKey> make_table() {
+  return {
+      {"scene.file", "OBJ, PLY or MGF file, relative to the config file (required)",
+       SET(o.scene.file = get_path(n, s)),
+       [](const Options& o) { return o.scene.file.empty() ? toml::array{} : toml::array{o.scene.file.string()}; }},
+      {"scene.emitters", "table `material = [r, g, b]` (or one number): emitted radiance in W/sr/m2, overriding the file",
+       SET(const toml::table* t = n.as_table();
+           if (!t) bad_value(s, fmt::format("expected a table of material = [r, g, b], got {}", type_name(n)));
+           o.scene.emitters.clear();
+           for (const auto& [name, value] : *t) {
+             ValueSource e = s;
+             e.key = s.key + "." + std::string(name.str());
+             o.scene.emitters[std::string(name.str())] = get_rgb(value, e);
+           }),
+       [](const Options& o) {
+         toml::table emitters;
+         for (const auto& [name, rgb] : o.scene.emitters) emitters.insert(name, toml::array{rgb[0], rgb[1], rgb[2]});
+         return one(std::move(emitters));
+       }},
+      {"scene.two_sided", "material names whose surfaces have two faces, each with its own radiosity",
+       SET(const toml::array* a = n.as_array();
+           if (!a) bad_value(s, fmt::format("expected an array of material names, got {}", type_name(n)));
+           o.scene.two_sided.clear();
+           for (const auto& v : *a) o.scene.two_sided.push_back(get_string(v, s))),
+       [](const Options& o) {
+         toml::array names;
+         for (const auto& name : o.scene.two_sided) names.push_back(name);
+         return one(std::move(names));
+       }},
+      {"scene.mgf_default_sides", "sides of MGF materials without a `sides` entity (see scene-formats.md)",
+       SET(const long long v = get_integer(n, s);
+           if (v != 1 && v != 2) bad_value(s, fmt::format("expected 1 or 2, got {}", v));
+           o.scene.mgf_default_sides = static_cast<int>(v)),
+       GET(o.scene.mgf_default_sides)},
+      {"mesh.max_patch_area", "largest patch area in scene units squared; 0: automatic, the scene box area / 2000",
+       SET(o.mesh.max_patch_area = get_number(n, s);
+           if (o.mesh.max_patch_area < 0) bad_value(s, "expected a positive area (or 0 for automatic)")),
+       GET(o.mesh.max_patch_area)},
+      {"mesh.curve_segments", "segments around a circle when tessellating MGF curved primitives",
+       SET(o.mesh.curve_segments = static_cast<int>(get_integer(n, s));
+           if (o.mesh.curve_segments < 3 || o.mesh.curve_segments > 1024) bad_value(s, "expected an integer in [3, 1024]")),
+       GET(o.mesh.curve_segments)},
+      {"hierarchy.group_threshold", "two items group when (sum of their box areas) / (area of the merged box) exceeds this",
+       SET(o.hierarchy.group_threshold = in_range(get_number(n, s), 0.0, 1e9, s)), GET(o.hierarchy.group_threshold)},
+      {"hierarchy.vp_area_ratio",
+       "a virtual patch's area is at most this times `mesh.max_patch_area` (grid 2^k x 2^k, at most 64 x 64)",
+       SET(o.hierarchy.vp_area_ratio = in_range(get_number(n, s), 1e-6, 1e9, s)), GET(o.hierarchy.vp_area_ratio)},
+      {"hierarchy.vp_grid", "fixed VP grid per box face (a power of two up to 64); 0: from `vp_area_ratio`",
+       SET(const long long g = get_integer(n, s);
+           if (g < 0 || g > 64 || (g & (g - 1)) != 0) bad_value(s, "expected 0 (automatic) or a power of two up to 64");
+           o.hierarchy.vp_grid = static_cast<int>(g)),
+       GET(o.hierarchy.vp_grid)},
+      {"hierarchy.max_share", "largest subscene box, as a share of the scene box's surface area",
+       SET(o.hierarchy.max_share = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.hierarchy.max_share)},
+      {"hierarchy.max_depth", "deepest subscene level; 0: no subscenes (algorithm.md: one level measured best)",
+       SET(o.hierarchy.max_depth = static_cast<int>(in_range(get_integer(n, s), 0, 64, s))), GET(o.hierarchy.max_depth)},
+      {"lines.total",
+       "stored lines in all boxes (hierarchical, multipath), or global lines of the first pass (classic; later passes use fewer)",
+       SET(o.lines.total = positive(get_integer(n, s), s)), GET(static_cast<int64_t>(o.lines.total))},
+      {"lines.root_fraction", "share of lines in the root box (hierarchical method)",
+       SET(o.lines.root_fraction = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.lines.root_fraction)},
+      {"lines.box_budget", "how the subscenes share the rest: by grouping `\"quotient\"` or by `\"objects\"`",
+       SET(o.lines.box_budget = get_choice(n, s, "budget", {"quotient", "objects"})), GET(o.lines.box_budget)},
+      {"lines.min_density",
+       "no subscene gets fewer lines per unit of box surface than this times the root's (all boxes scaled down alike "
+       "when the floors ask for more than `lines.total`)",
+       SET(o.lines.min_density = in_range(get_number(n, s), 0.0, 1e6, s)), GET(o.lines.min_density)},
+      {"lines.seed", "seed of every random choice; same config, seed and threads give identical results",
+       SET(const long long v = get_integer(n, s);
+           if (v < 0) bad_value(s, "expected a non-negative integer");
+           o.lines.seed = static_cast<unsigned long long>(v)),
+       GET(static_cast<int64_t>(o.lines.seed))},
+      {"lines.sequence", "`\"halton\"` (randomised Halton) or `\"random\"` global lines; see algorithm.md",
+       SET(o.lines.sequence = get_choice(n, s, "sequence", {"random", "halton"})), GET(o.lines.sequence)},
+      {"first_shot.lines", "local lines of the first shot, shared among emitting faces by power",
+       SET(o.first_shot.lines = positive(get_integer(n, s), s)), GET(static_cast<int64_t>(o.first_shot.lines))},
+      {"first_shot.accelerate",
+       "hierarchical method: local lines entering a subscene are tested against the AR's associated patches first "
+       "(algorithm.md)",
+       SET(o.first_shot.accelerate = get_bool(n, s)), GET(o.first_shot.accelerate)},
+      {"first_shot.mode",
+       "`\"auto\"`: an emitting face that global lines sample better is shot by them; `\"local\"`: every emitter by "
+       "local lines",
+       SET(o.first_shot.mode = get_choice(n, s, "mode", {"auto", "local"})), GET(o.first_shot.mode)},
+      {"solver.method",
+       "`\"hierarchical\"`, `\"multipath\"` (stored lines, root box only) or `\"classic\"` (fresh lines, no store)",
+       SET(o.solver.method = get_method(n, s)), GET(std::string(to_string(o.solver.method)))},
+      {"solver.iterations", "cap on passes (classic) or iterations over the stored lines",
+       SET(o.solver.iterations = static_cast<int>(std::min(positive(get_integer(n, s), s), 100000LL))),
+       GET(o.solver.iterations)},
+      {"solver.tolerance", "stop when (unshot power + power held in ARs) / emitted power falls below this",
+       SET(o.solver.tolerance = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.solver.tolerance)},
+      {"solver.threads", "worker threads; 0 uses every hardware thread",
+       SET(o.solver.threads = static_cast<int>(in_range(get_integer(n, s), 0, 4096, s))), GET(o.solver.threads)},
+      {"solver.adaptive_lines",
+       "stored-line methods: later iterations take a share of each box's lines in proportion to the power it has left "
+       "to send",
+       SET(o.solver.adaptive_lines = get_bool(n, s)), GET(o.solver.adaptive_lines)},
+      {"solver.schedule",
+       "hierarchical: `\"v-cycle\"` (subscenes deepest first, the root, then top-down) or `\"top-down\"` (the paper's "
+       "MP(root))",
+       SET(o.solver.schedule = get_choice(n, s, "schedule", {"v-cycle", "top-down"})), GET(o.solver.schedule)},
+      {"store.dir", "line store folder (relative to the config file)", SET(o.store.dir = get_path(n, s)),
+       GET(o.store.dir.string())},
+      {"store.chunk_lines", "lines per compressed chunk (shapes the store)",
+       SET(o.store.chunk_lines = static_cast<int>(in_range(get_integer(n, s), 256, 1 << 24, s))), GET(o.store.chunk_lines)},
+      {"store.zstd_level", "zstd level of the chunks",
+       SET(o.store.zstd_level = static_cast<int>(in_range(get_integer(n, s), 1, 19, s))), GET(o.store.zstd_level)},
+      {"output.dir", "result folder (relative to the config file), created if missing", SET(o.output.dir = get_path(n, s)),
+       GET(o.output.dir.string())},
+      {"output.exr", "an EXR image per camera", SET(o.output.exr = get_bool(n, s)), GET(o.output.exr)},
+      {"output.png", "a tone-mapped PNG preview beside each EXR", SET(o.output.png = get_bool(n, s)), GET(o.output.png)},
+      {"camera",
+       "`name`, `position`, `look_at`, `up` (`[0,1,0]`), `fov_deg` (vertical, 40), `width`, `height` (512), `samples` "
+       "per pixel (4), `exposure` (0: pixel = radiance x 2^exposure)",
+       SET(o.cameras.clear();
+           if (const toml::table* t = n.as_table()) {
+             o.cameras.push_back(get_camera(*t, s, 0));
+             return;
+           }
+           const toml::array* a = n.as_array();
+           if (!a || !a->is_array_of_tables()) bad_value(s, "expected [[camera]] tables");
+           for (size_t i = 0; i < a->size(); ++i) o.cameras.push_back(get_camera(*a->get(i)->as_table(), s, i))),
+       [](const Options& o) {
+         if (o.cameras.empty()) return toml::array{};
+         toml::array cameras;
+         for (const auto& c : o.cameras) cameras.push_back(camera_table(c));
+         return one(std::move(cameras));
+       }},
+  };
+}
+
+#undef SET
+#undef GET
+
+// A printed value as TOML writes it inline.
+std::string inline_toml(const toml::node& node) {
+  std::ostringstream out;
+  if (const toml::table* t = node.as_table()) out << (t->empty() ? "{}" : "(a table)");
+  else if (const toml::array* a = node.as_array()) out << (a->empty() ? "[]" : "(an array)");
+  else node.visit([&](const auto& v) { out << v; });
+  return out.str();
+}
+
+}  // namespace
+
+const char* to_string(SolverMethod m) {
+  switch (m) {
+    case SolverMethod::hierarchical: return "hierarchical";
+    case SolverMethod::multipath: return "multipath";
+    case SolverMethod::classic: return "classic";
+  }
+  return "?";
+}
+
+const std::vector<ConfigKey>& config_keys() {
+  static const std::vector<ConfigKey> table = make_table();
+  return table;
+}
+
+const ConfigKey* find_config_key(const std::string& key) {
+  static const std::map<std::string, const ConfigKey*> index = [] {
+    std::map<std::string, const ConfigKey*> m;
+    for (const ConfigKey& k : config_keys()) m[k.key] = &k;
+    return m;
+  }();
+  const auto it = index.find(key);
+  return it == index.end() ? nullptr : it->second;
+}
+
+std::string config_keys_markdown() {
+  const Options defaults;
+  std::string out = "| key | default | meaning |\n|---|---|---|\n";
+  for (const ConfigKey& k : config_keys()) {
+    const toml::array value = k.get(defaults);
+    const std::string shown = value.empty() ? "none" : "`" + inline_toml(*value.get(0)) + "`";
+    out += fmt::format("| `{}` | {} | {} |\n", k.key == "camera" ? "[[camera]]" : k.key, shown, k.meaning);
+  }
+  return out;
+}
+
+}  // namespace mpath

@@ -1,0 +1,451 @@
+// Bottom-up grouping of objects into the hierarchy of subscene boxes
+// (docs/algorithm.md, "Hierarchy of subscenes").
+#include "hierarchy.h"
+
+#include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <queue>
+#include <set>
+
+namespace mpath {
+
+namespace {
+
+// The finest VP grid a face gets (64 x 64 VPs, 98,304 ARs per face).
+constexpr int kMaxGrid = 64;
+// A group box that would enclose a single group item growing its surface by
+// less than this factor takes that item's contents instead of nesting it.
+constexpr double kAbsorbGrowth = 1.5;
+// An object whose box has more than this share of the scene box's surface is
+// too large to be grouped whole (hierarchy.max_share bounds the groups).
+constexpr double kMaxSceneShare = 0.5;
+// A subscene holds at least this many polygons (two books on a shelf do not
+// pay for the walls, ARs and lines of a box of their own)...
+constexpr size_t kMinPolygons = 24;
+// ...and has at most this share of the surface of the box it is in (a box
+// nearly as large as its parent adds a level and nothing else).
+constexpr double kMaxNesting = 0.5;
+
+Bounds merged(const Bounds& a, const Bounds& b) {
+  Bounds m = a;
+  m.extend(b.lo);
+  m.extend(b.hi);
+  return m;
+}
+
+// The interior of `box` shrunk by `eps` meets the interior of `other`.
+bool interiors_overlap(const Bounds& box, const Bounds& other, double eps) {
+  for (int i = 0; i < 3; ++i)
+    if (other.hi[i] <= box.lo[i] + eps || other.lo[i] >= box.hi[i] - eps) return false;
+  return true;
+}
+
+bool contains(const Bounds& box, const Bounds& inner, double eps) {
+  for (int i = 0; i < 3; ++i)
+    if (inner.lo[i] < box.lo[i] - eps || inner.hi[i] > box.hi[i] + eps) return false;
+  return true;
+}
+
+}  // namespace
+
+namespace {
+
+// A grouping item: an object or a group (a future box).
+struct Item {
+  Bounds bounds;
+  double area = 0;
+  bool alive = true;
+  int object = -1;  // for an object item
+  // For a group: its direct members (items), and the quotient that formed it.
+  std::vector<int> members;
+  double quotient = 0;
+};
+
+class Builder {
+ public:
+  Builder(const PatchMesh& mesh, const HierarchyOptions& options) : mesh_(mesh), options_(options) {
+    int objects = 0;
+    for (const Patch& p : mesh.patches) objects = std::max(objects, p.object + 1);
+    object_patches_.resize(objects);
+    for (size_t p = 0; p < mesh.patches.size(); ++p) object_patches_[mesh.patches[p].object].push_back(static_cast<uint32_t>(p));
+    eps_ = 1e-6 * std::max(mesh.bounds.diagonal(), 1e-30);
+    scene_area_ = mesh.bounds.surface_area();
+    // An object too large to group whole (a file whose furniture is one
+    // object, or the whole scene in one) is split into its connected parts,
+    // which are the items instead (design.md section 3).
+    for (int o = 0; o < objects; ++o) {
+      Bounds b;
+      for (uint32_t p : object_patches_[o])
+        for (uint32_t v : mesh.patches[p].v) b.extend(mesh.vertices[v]);
+      if (object_patches_[o].empty() || b.surface_area() <= kMaxSceneShare * scene_area_) continue;
+      auto parts = connected_parts(object_patches_[o]);
+      object_patches_[o] = std::move(parts[0]);
+      for (size_t k = 1; k < parts.size(); ++k) object_patches_.push_back(std::move(parts[k]));
+    }
+    objects = static_cast<int>(object_patches_.size());
+    object_polygons_.resize(objects);
+    for (int o = 0; o < objects; ++o) {
+      std::set<int> polygons;
+      for (uint32_t p : object_patches_[o]) polygons.insert(mesh.patches[p].polygon);
+      object_polygons_[o] = polygons.size();
+    }
+    object_bounds_.resize(objects);
+    for (int o = 0; o < objects; ++o) {
+      if (object_patches_[o].empty()) continue;
+      Item item;
+      item.object = o;
+      for (uint32_t p : object_patches_[o])
+        for (uint32_t v : mesh.patches[p].v) item.bounds.extend(mesh.vertices[v]);
+      object_bounds_[o] = item.bounds;
+      item.area = item.bounds.surface_area();
+      if (is_shell(item.bounds)) {
+        shell_.push_back(o);  // stays in the root, never grouped
+        continue;
+      }
+      items_.push_back(std::move(item));
+    }
+  }
+
+  // Patches joined by shared corners (positions equal to 1e-6 of the scene's
+  // size), as sets of patches, largest first (ties by first patch).
+  std::vector<std::vector<uint32_t>> connected_parts(const std::vector<uint32_t>& patches) const {
+    std::vector<uint32_t> parent(patches.size());
+    std::iota(parent.begin(), parent.end(), 0u);
+    auto find = [&](uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    std::map<std::array<long long, 3>, uint32_t> corner;  // position -> first patch seen there
+    for (uint32_t i = 0; i < patches.size(); ++i)
+      for (uint32_t v : mesh_.patches[patches[i]].v) {
+        const Vec3& x = mesh_.vertices[v];
+        const std::array<long long, 3> key{std::llround(x.x / eps_), std::llround(x.y / eps_), std::llround(x.z / eps_)};
+        const auto [it, fresh] = corner.emplace(key, i);
+        if (!fresh) parent[find(i)] = find(it->second);
+      }
+    std::map<uint32_t, std::vector<uint32_t>> by_root;
+    for (uint32_t i = 0; i < patches.size(); ++i) by_root[find(i)].push_back(patches[i]);
+    std::vector<std::vector<uint32_t>> parts;
+    for (auto& [root, list] : by_root) parts.push_back(std::move(list));
+    std::stable_sort(parts.begin(), parts.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+    return parts;
+  }
+
+  // The scene's shell: an object lying against a side of the scene box and
+  // spanning at least half of it both ways (a floor, a wall, a ceiling). The
+  // area quotient favours grouping such a flat, large object with whatever
+  // stands near it, which would make a subscene of half the room; the shell
+  // belongs to the root.
+  bool is_shell(const Bounds& b) const {
+    const Bounds& scene = mesh_.bounds;
+    const Vec3 s = scene.size(), e = b.size();
+    for (int axis = 0; axis < 3; ++axis) {
+      const bool on_side = std::fabs(b.lo[axis] - scene.lo[axis]) <= 1e3 * eps_ ||
+                           std::fabs(b.hi[axis] - scene.hi[axis]) <= 1e3 * eps_;
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      if (on_side && e[u] >= 0.5 * s[u] && e[v] >= 0.5 * s[v]) return true;
+    }
+    return false;
+  }
+
+  // Greedy bottom-up grouping: the pair with the largest quotient above the
+  // threshold first; each new group is an item at once.
+  void group() {
+    // Every pair once, on every thread; the queue orders candidates totally
+    // (quotient, then indices), so the grouping does not depend on threads.
+    const int n = static_cast<int>(items_.size());
+    tbb::enumerable_thread_specific<std::vector<Candidate>> found;
+    tbb::parallel_for(0, n, [&](int a) {
+      auto& local = found.local();
+      Candidate c;
+      for (int b = a + 1; b < n; ++b)
+        if (candidate(a, b, c)) local.push_back(c);
+    });
+    std::vector<Candidate> all;
+    for (auto& local : found) all.insert(all.end(), local.begin(), local.end());
+    queue_ = std::priority_queue<Candidate>(std::less<Candidate>(), std::move(all));
+    while (!queue_.empty()) {
+      const Candidate c = queue_.top();
+      queue_.pop();
+      if (!items_[c.a].alive || !items_[c.b].alive) continue;
+      try_group(c);
+    }
+  }
+
+  Hierarchy finish() {
+    Hierarchy h;
+    h.patch_box.assign(mesh_.patches.size(), 0);
+    h.boxes.emplace_back();
+    SceneBox& root = h.boxes[0];
+    root.bounds = mesh_.bounds;
+    std::vector<int> top;
+    root.objects = shell_;
+    for (size_t i = 0; i < items_.size(); ++i)
+      if (items_[i].alive) top.push_back(static_cast<int>(i));
+    place(h, 0, top, scene_area_);
+    // Deeper than max_depth: dissolved into the ancestor at max_depth.
+    for (size_t b = 0; b < h.boxes.size(); ++b) finish_box(h, static_cast<int>(b));
+    // Boxes listed by depth, then index (children run after their parents).
+    h.depth_order.resize(h.boxes.size());
+    for (size_t b = 0; b < h.boxes.size(); ++b) h.depth_order[b] = static_cast<int>(b);
+    std::stable_sort(h.depth_order.begin(), h.depth_order.end(),
+                     [&](int a, int b) { return h.boxes[a].depth < h.boxes[b].depth; });
+    return h;
+  }
+
+ private:
+  struct Candidate {
+    double q;
+    int a, b;
+    bool operator<(const Candidate& o) const {
+      if (q != o.q) return q < o.q;
+      if (a != o.a) return a > o.a;
+      return b > o.b;
+    }
+  };
+
+  // The pair (a, b) as a candidate when its quotient passes the threshold.
+  bool candidate(int a, int b, Candidate& out) const {
+    const Bounds& x = items_[a].bounds;
+    const Bounds& y = items_[b].bounds;
+    const double dx = std::max(x.hi.x, y.hi.x) - std::min(x.lo.x, y.lo.x);
+    const double dy = std::max(x.hi.y, y.hi.y) - std::min(x.lo.y, y.lo.y);
+    const double dz = std::max(x.hi.z, y.hi.z) - std::min(x.lo.z, y.lo.z);
+    const double area = 2 * (dx * dy + dy * dz + dz * dx);
+    if (!(area > 0) || area > options_.max_share * scene_area_) return false;
+    out = {(items_[a].area + items_[b].area) / area, a, b};
+    return out.q > options_.group_threshold;
+  }
+
+  void push_pair(int a, int b) {
+    Candidate c;
+    if (candidate(a, b, c)) queue_.push(c);
+  }
+
+  void collect_objects(int item, std::vector<int>& out) const {
+    if (items_[item].object >= 0) out.push_back(items_[item].object);
+    for (int m : items_[item].members) collect_objects(m, out);
+  }
+
+  // Would a box with these bounds hold polygons of `item` (not a member) in its interior?
+  bool intrudes(int item, const Bounds& box) const {
+    if (items_[item].object >= 0) return object_meets(items_[item].object, box);
+    return interiors_overlap(box, items_[item].bounds, eps_);  // another box overlapping: never
+  }
+
+  bool object_meets(int object, const Bounds& box) const {
+    // An object whose bounds stay clear of the box's interior (the usual
+    // case) has no polygon in it.
+    if (!interiors_overlap(box, object_bounds_[object], eps_)) return false;
+    Bounds inner = box;
+    for (int i = 0; i < 3; ++i) {
+      inner.lo[i] += eps_;
+      inner.hi[i] -= eps_;
+    }
+    for (uint32_t p : object_patches_[object]) {
+      const Patch& patch = mesh_.patches[p];
+      const Vec3& a = mesh_.vertices[patch.v[0]];
+      const Vec3& b = mesh_.vertices[patch.v[1]];
+      const Vec3& c = mesh_.vertices[patch.v[2]];
+      if (triangle_meets_box(a, b, c, inner)) return true;
+      if (!patch.is_triangle() && triangle_meets_box(a, c, mesh_.vertices[patch.v[3]], inner)) return true;
+    }
+    return false;
+  }
+
+  void try_group(const Candidate& c) {
+    std::vector<int> members = {c.a, c.b};
+    member_.assign(items_.size(), 0);
+    member_[c.a] = member_[c.b] = 1;
+    Bounds box = merged(items_[c.a].bounds, items_[c.b].bounds);
+    // Items reaching into the box join it (a cup on a table, a chair pushed
+    // under it), the box growing to hold them, unless one is larger than the
+    // box: then the box is refused (it would cut through a wall, a floor).
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (size_t i = 0; i < items_.size(); ++i) {
+        if (!items_[i].alive || member_[i]) continue;
+        if (!intrudes(static_cast<int>(i), box)) continue;
+        if (!contains(box, items_[i].bounds, eps_) && items_[i].area > box.surface_area()) return;
+        member_[i] = 1;
+        members.push_back(static_cast<int>(i));
+        box = merged(box, items_[i].bounds);
+        if (box.surface_area() > options_.max_share * scene_area_) return;
+        grew = true;
+      }
+    }
+    for (int o : shell_)
+      if (object_meets(o, box)) return;
+    const Vec3 size = box.size();
+    if (std::min({size.x, size.y, size.z}) < 1e3 * eps_) return;  // a flat box holds nothing inside
+    if (box.surface_area() > options_.max_share * scene_area_) return;
+    Item group;
+    group.bounds = box;
+    group.area = box.surface_area();
+    group.quotient = c.q;
+    for (int m : members) {
+      Item& it = items_[m];
+      it.alive = false;
+      if (it.object < 0 && group.area < kAbsorbGrowth * it.area) {
+        group.members.insert(group.members.end(), it.members.begin(), it.members.end());
+        group.quotient = std::max(group.quotient, it.quotient);
+      } else {
+        group.members.push_back(m);
+      }
+    }
+    const int id = static_cast<int>(items_.size());
+    items_.push_back(std::move(group));
+    for (int i = 0; i < id; ++i)
+      if (items_[i].alive) push_pair(i, id);
+  }
+
+  size_t item_polygons(int item) const {
+    if (items_[item].object >= 0) return object_polygons_[items_[item].object];
+    size_t n = 0;
+    for (int m : items_[item].members) n += item_polygons(m);
+    return n;
+  }
+
+  // Puts `items` into box `box` (of surface area `area`): objects directly,
+  // groups as child boxes, except groups that would not pay as subscenes,
+  // whose contents go into `box` instead: deeper than max_depth, holding
+  // fewer than kMinPolygons polygons, or nearly as large as `box`.
+  void place(Hierarchy& h, int box, const std::vector<int>& items, double area) {
+    for (int i : items) {
+      const Item& it = items_[i];
+      if (it.object >= 0) {
+        h.boxes[box].objects.push_back(it.object);
+        continue;
+      }
+      if (h.boxes[box].depth + 1 > options_.max_depth || item_polygons(i) < kMinPolygons ||
+          it.area > kMaxNesting * area) {
+        place(h, box, it.members, area);
+        continue;
+      }
+      const int child = static_cast<int>(h.boxes.size());
+      h.boxes.emplace_back();
+      h.boxes[child].parent = box;
+      h.boxes[child].depth = h.boxes[box].depth + 1;
+      h.boxes[child].quotient = it.quotient;
+      h.boxes[box].children.push_back(child);
+      place(h, child, it.members, it.area);
+    }
+  }
+
+  void finish_box(Hierarchy& h, int b) {
+    SceneBox& box = h.boxes[b];
+    std::sort(box.objects.begin(), box.objects.end());
+    for (int o : box.objects)
+      for (uint32_t p : object_patches_[o]) {
+        box.patches.push_back(p);
+        h.patch_box[p] = b;
+      }
+    std::sort(box.patches.begin(), box.patches.end());
+    if (b > 0) {
+      std::vector<int> objects;
+      std::vector<int> stack = {b};
+      box.bounds = Bounds{};
+      while (!stack.empty()) {
+        const int x = stack.back();
+        stack.pop_back();
+        objects.insert(objects.end(), h.boxes[x].objects.begin(), h.boxes[x].objects.end());
+        stack.insert(stack.end(), h.boxes[x].children.begin(), h.boxes[x].children.end());
+      }
+      for (int o : objects)
+        for (uint32_t p : object_patches_[o])
+          for (uint32_t v : mesh_.patches[p].v) box.bounds.extend(mesh_.vertices[v]);
+    }
+    // Totals over the box and its descendants.
+    std::set<int> polygons;
+    std::vector<int> stack = {b};
+    box.objects_total = 0;
+    while (!stack.empty()) {
+      const int x = stack.back();
+      stack.pop_back();
+      box.objects_total += static_cast<int>(h.boxes[x].objects.size());
+      for (int o : h.boxes[x].objects)
+        for (uint32_t p : object_patches_[o]) polygons.insert(mesh_.patches[p].polygon);
+      stack.insert(stack.end(), h.boxes[x].children.begin(), h.boxes[x].children.end());
+    }
+    box.polygons_total = polygons.size();
+    // Virtual patches: 2^k x 2^k per face, k grown until a VP's area is at most
+    // vp_area_ratio x max_patch_area (or vp_grid x vp_grid).
+    const Vec3 s = box.bounds.size();
+    const double limit = options_.vp_area_ratio * mesh_.max_patch_area;
+    for (int f = 0; f < 6; ++f) {
+      const int axis = f / 2;
+      const double area = s[(axis + 1) % 3] * s[(axis + 2) % 3];
+      int n = options_.vp_grid;
+      if (n <= 0) {
+        n = 1;
+        while (n < kMaxGrid && area / (double(n) * n) > limit) n *= 2;
+      }
+      box.grid[f] = b == 0 ? 0 : n;  // the root has no walls of its own
+    }
+    box.set_ar_offsets();
+  }
+
+  const PatchMesh& mesh_;
+  HierarchyOptions options_;
+  std::vector<std::vector<uint32_t>> object_patches_;
+  std::vector<size_t> object_polygons_;
+  std::vector<Bounds> object_bounds_;
+  std::vector<Item> items_;
+  std::vector<int> shell_;  // objects of the scene's shell
+  std::priority_queue<Candidate> queue_;
+  std::vector<uint8_t> member_;  // try_group's scratch: items in the box being formed
+  double eps_ = 0, scene_area_ = 0;
+};
+
+}  // namespace
+
+int Hierarchy::max_depth() const {
+  int d = 0;
+  for (const SceneBox& b : boxes) d = std::max(d, b.depth);
+  return d;
+}
+
+size_t Hierarchy::ar_total() const {
+  size_t n = 0;
+  for (size_t b = 1; b < boxes.size(); ++b) n += boxes[b].ar_count();
+  return n;
+}
+
+
+Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat) {
+  HierarchyOptions o = options;
+  if (flat) o.max_depth = 0;
+  Builder builder(mesh, o);
+  if (o.max_depth > 0) builder.group();
+  return builder.finish();
+}
+
+std::string describe_hierarchy(const Hierarchy& h, const std::vector<uint64_t>& lines) {
+  std::string out = fmt::format("{} box(es), depth {}, {} ARs in subscene walls\n", h.boxes.size(), h.max_depth(), h.ar_total());
+  std::vector<std::pair<int, int>> stack = {{0, 0}};
+  while (!stack.empty()) {
+    const auto [b, indent] = stack.back();
+    stack.pop_back();
+    const SceneBox& box = h.boxes[b];
+    const Vec3 s = box.bounds.size();
+    out += fmt::format("{:{}}box {}{}: depth {}, {} object(s) ({} direct), {} polygon(s), {} patch(es) direct, "
+                       "{} child box(es), size {:.4g} x {:.4g} x {:.4g}",
+                       "", 2 * indent, b, b == 0 ? " (root)" : "", box.depth, box.objects_total, box.objects.size(),
+                       box.polygons_total, box.patches.size(), box.children.size(), s.x, s.y, s.z);
+    if (b > 0)
+      out += fmt::format(", quotient {:.3f}, VP grids {}x{}, {}x{}, {}x{} (x, y, z faces), {} ARs", box.quotient, box.grid[0],
+                         box.grid[0], box.grid[2], box.grid[2], box.grid[4], box.grid[4], box.ar_count());
+    if (b < static_cast<int>(lines.size())) out += fmt::format(", {} lines", lines[b]);
+    out += "\n";
+    for (auto it = box.children.rbegin(); it != box.children.rend(); ++it) stack.push_back({*it, indent + 1});
+  }
+  return out;
+}
+
+}  // namespace mpath

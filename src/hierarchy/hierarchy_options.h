@@ -1,0 +1,31 @@
+// Settings of the hierarchy of subscenes and of the lines traced in its boxes
+// (config sections [hierarchy] and [lines]; docs/user-guide.md lists the keys).
+#pragma once
+
+#include <string>
+
+namespace mpath {
+
+struct HierarchyOptions {
+  double group_threshold = 0.4;  // docs/algorithm.md: a table and its legs group at about 0.4
+  double vp_area_ratio = 16.0;
+  int vp_grid = 0;  // 0: derived from vp_area_ratio
+  // Largest subscene box, as a share of the scene box's surface area.
+  double max_share = 0.5;
+  int max_depth = 1;  // docs/algorithm.md: one level measured best
+};
+
+struct LineOptions {
+  long long total = 1'000'000;
+  double root_fraction = 2.0 / 3.0;
+  // How the subscenes share the rest: "quotient" (their grouping quotient)
+  // or "objects" (their object count), paper 3.3.1.
+  std::string box_budget = "quotient";
+  // No subscene gets fewer lines per unit of box surface than this times
+  // the root's (docs/algorithm.md).
+  double min_density = 1.0;
+  unsigned long long seed = 1;
+  std::string sequence = "halton";  // "random" or "halton" (docs/algorithm.md)
+};
+
+}  // namespace mpath

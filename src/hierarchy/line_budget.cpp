@@ -1,0 +1,66 @@
+// How many lines each box of the hierarchy gets, and VP grids fitted to them.
+#include "line_budget.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mpath {
+
+namespace {
+
+// Lines each box would get before the floor of 4 lines per AR.
+std::vector<double> wanted_lines(const Hierarchy& h, const LineOptions& lines) {
+  const double total = static_cast<double>(lines.total);
+  if (h.boxes.size() == 1) return {total};
+  // Paper 3.3.1: root_fraction in the root, the rest by quotient (or objects)...
+  const double root = total * lines.root_fraction;
+  double weights = 0;
+  auto weight = [&](const SceneBox& b) { return lines.box_budget == "objects" ? double(b.objects_total) : b.quotient; };
+  for (size_t b = 1; b < h.boxes.size(); ++b) weights += weight(h.boxes[b]);
+  // ...but no subscene sampled more thinly than min_density times the root's
+  // density (lines per unit of box surface): with many subscenes the rest
+  // spread thin left them with fewer lines per area than the root. When the
+  // floors ask for more lines than there are, every box is scaled down alike.
+  const double root_density = root / line_box(h.boxes[0].bounds).surface_area();
+  std::vector<double> want(h.boxes.size(), 0.0);
+  want[0] = root;
+  double sum = root;
+  for (size_t b = 1; b < h.boxes.size(); ++b) {
+    const double share = weights > 0 ? (total - root) * weight(h.boxes[b]) / weights : 0.0;
+    want[b] = std::max(share, lines.min_density * root_density * line_box(h.boxes[b].bounds).surface_area());
+    sum += want[b];
+  }
+  const double scale = sum > total ? total / sum : 1.0;
+  for (double& w : want) w *= scale;
+  return want;
+}
+
+}  // namespace
+
+std::vector<uint64_t> box_line_budget(const Hierarchy& h, const LineOptions& lines) {
+  const std::vector<double> want = wanted_lines(h, lines);
+  std::vector<uint64_t> out(h.boxes.size(), 0);
+  out[0] = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(want[0])));
+  for (size_t b = 1; b < h.boxes.size(); ++b)
+    out[b] = std::max<uint64_t>(static_cast<uint64_t>(std::llround(want[b])), 4ull * h.boxes[b].ar_count());
+  return out;
+}
+
+void fit_vp_grids(Hierarchy& h, const LineOptions& lines) {
+  const std::vector<double> want = wanted_lines(h, lines);
+  for (size_t b = 1; b < h.boxes.size(); ++b) {
+    SceneBox& box = h.boxes[b];
+    // Halve the finest grid until the box's lines cross each AR 8 times on average.
+    while (4.0 * box.ar_count() > want[b]) {
+      int finest = 0;
+      for (int f = 1; f < 6; ++f)
+        if (box.grid[f] > box.grid[finest]) finest = f;
+      if (box.grid[finest] <= 1) break;
+      const int n = box.grid[finest] / 2;
+      for (int f = 0; f < 6; ++f) box.grid[f] = std::min(box.grid[f], n);
+      box.set_ar_offsets();
+    }
+  }
+}
+
+}  // namespace mpath

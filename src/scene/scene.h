@@ -1,0 +1,51 @@
+// The scene model: materials, objects and planar polygons, as read from a file
+// and before meshing. Polygons are counter-clockwise seen from their front.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "vec3.h"
+
+namespace mpath {
+
+struct Material {
+  std::string name;
+  Rgb rho{0.5, 0.5, 0.5};   // diffuse reflectance, each in [0, 1)
+  Rgb emission{0, 0, 0};    // emitted radiance, W/sr/m2 (exitance is pi times this)
+  bool two_sided = false;
+
+  bool emits() const { return emission[0] > 0 || emission[1] > 0 || emission[2] > 0; }
+};
+
+struct Polygon {
+  std::vector<Vec3> vertices;
+  int material = 0;
+  int object = 0;
+};
+
+struct SceneObject {
+  std::string name;
+};
+
+struct Scene {
+  std::filesystem::path file;
+  std::vector<Material> materials;
+  std::vector<SceneObject> objects;
+  std::vector<Polygon> polygons;
+
+  Bounds bounds() const;
+  int find_material(const std::string& name) const;  // -1 when absent
+  // True when every material has equal r, g, b reflectance and emission.
+  bool is_grey() const;
+};
+
+// Newell normal of a polygon: direction is the front normal, length is twice the area.
+Vec3 newell_normal(const std::vector<Vec3>& vertices);
+double polygon_area(const std::vector<Vec3>& vertices);
+
+// Checks a material read from `path`: reflectances in [0, 1), emission finite and >= 0.
+void validate_material(const Material& m, const std::string& where);
+
+}  // namespace mpath

@@ -1,0 +1,66 @@
+// Random numbers and the sampling of points, directions and global lines.
+#pragma once
+
+#include <pcg_random.hpp>
+#include <string>
+
+#include "box_geometry.h"
+#include "mesh.h"
+
+namespace mpath {
+
+using Rng = pcg32;
+
+// Independent stream for (seed, purpose, shard): same inputs, same numbers.
+Rng make_rng(unsigned long long seed, unsigned purpose, unsigned long long shard);
+
+inline double uniform(Rng& rng) { return std::ldexp(static_cast<double>(rng()), -32); }
+
+// Cosine-distributed direction about unit normal n.
+Vec3 cosine_direction(const Vec3& n, Rng& rng);
+Vec3 cosine_direction(const Vec3& n, double u1, double u2);
+
+// Uniform point on a patch (a quad is split as Embree splits it).
+Vec3 uniform_point(const PatchMesh& mesh, const Patch& patch, Rng& rng);
+
+// A segment of a uniformly distributed line through a box: starts a hair
+// outside the box and ends a hair past the far side.
+struct GlobalLine {
+  Vec3 org;
+  Vec3 dir;
+  double length;
+};
+
+class BoxLineSampler {
+ public:
+  explicit BoxLineSampler(const Bounds& box);
+  GlobalLine sample(Rng& rng) const;
+  // The line of a point of [0,1)^4: u[0] picks the face and one coordinate on
+  // it, u[1] the other, u[2] and u[3] the cosine-distributed direction.
+  GlobalLine sample(const double u[4]) const;
+  const Bounds& box() const { return box_; }
+  double surface_area() const { return box_.surface_area(); }
+
+ private:
+  Bounds box_;
+  double face_cdf_[6];
+  double hair_;
+};
+
+// Where the 4D points of a set of global lines come from: independent random
+// numbers, or a randomised Halton sequence (bases 2, 3, 5, 7, shifted modulo 1
+// by a random vector per pass: Cranley-Patterson rotation), whose lines cover
+// the box more evenly, so faces get crossing counts closer to their expectation.
+class LineSequence {
+ public:
+  LineSequence(const std::string& kind, unsigned long long seed, unsigned pass);
+  void point(uint64_t index, Rng& rng, double u[4]) const;
+
+ private:
+  bool halton_ = false;
+  double shift_[4] = {0, 0, 0, 0};
+};
+
+double radical_inverse(uint64_t index, unsigned base);
+
+}  // namespace mpath

@@ -1,0 +1,74 @@
+// Ray casting with Embree 3 over the patch mesh: nearest hits for local lines
+// and camera rays, and every hit along a global line (an intersection filter
+// collects them; distances are recomputed in double from the patch planes).
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <string>
+#include <vector>
+
+#include "line_hit.h"
+#include "mesh.h"
+
+namespace mpath {
+
+struct NearestHit {
+  int patch = -1;  // -1: the ray left the scene
+  double t = 0;
+};
+
+class Tracer {
+ public:
+  explicit Tracer(const PatchMesh& mesh);
+  // Over the patches `subset` of `mesh` only (a box's own patches); hits
+  // still name patches by their index in the mesh.
+  Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset);
+  ~Tracer();
+  Tracer(const Tracer&) = delete;
+  Tracer& operator=(const Tracer&) = delete;
+
+  NearestHit nearest(const Vec3& org, const Vec3& dir, double tnear, double tfar) const;
+
+  // Nearest hit of a line leaving patch `from` at `org` (on the patch). Sees
+  // surfaces in contact with the patch (at distance 0, facing it), never the
+  // patch itself or coplanar patches facing its way.
+  NearestHit nearest_from(int from, const Vec3& org, const Vec3& dir, double tfar) const;
+
+  // Every patch crossed by org + t dir, t in [0, tfar], sorted by distance,
+  // with crossings repeated on shared edges of coplanar patches removed.
+  // `scratch` is reused between calls to avoid allocation.
+  void all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector<LineHit>& out) const;
+
+
+  static std::string embree_version();
+  // Crossings closer than this along a line are at one distance (surfaces in contact).
+  double tie_epsilon() const { return tie_epsilon_; }
+
+  // The Embree scene, for benchmarks that measure Embree alone.
+  RTCScene embree_scene() const { return scene_; }
+  // Mesh patch of traced patch `local`.
+  int global(int local) const { return all_ ? local : static_cast<int>(subset_[local]); }
+
+ private:
+  struct Plane {
+    Vec3 n;
+    double d;  // n . x = d on the plane
+  };
+  Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset, bool all);
+  void add_quads(size_t traced);
+  // Distance along the ray to the plane of traced patch `local`, in double precision.
+  double plane_distance(int local, const Vec3& org, const Vec3& dir, double fallback) const;
+
+  const PatchMesh& mesh_;
+  bool all_ = true;               // every patch of the mesh is traced
+  std::vector<uint32_t> subset_;  // otherwise: traced patch -> mesh patch
+  std::vector<Plane> planes_;     // per traced patch
+  RTCDevice device_ = nullptr;
+  RTCScene scene_ = nullptr;
+  double tie_epsilon_ = 0;
+  double hair_ = 0;      // a tiny fraction of the scene size
+  double near_tie_ = 0;  // hits closer than this get distances in double precision
+};
+
+}  // namespace mpath
