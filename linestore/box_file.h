@@ -17,7 +17,7 @@ namespace mpath::linestore {
 inline constexpr uint32_t kFormatVersion = 2;
 
 // What a box file's lines tell about its box, besides the lines themselves
-// (design.md section 6), all counted from the file's lines.
+// (docs/method.md, 6), all counted from the file's lines.
 struct BoxCounts {
   static constexpr size_t kAssociated = 4;  // associated patches kept per AR
   std::vector<uint32_t> patch_crossings;    // per patch of the box (its faces are met this often)

@@ -1,4 +1,4 @@
-// The record of one stored line, in order along the line (design.md section 5):
+// The record of one stored line, in order along the line (docs/method.md, 5):
 // the AR of its box's wall where it enters, its events (patch crossings with
 // the side facing forward; child-box crossings with entry and exit ARs), and
 // the AR where it leaves. The root box's lines have no wall ARs.

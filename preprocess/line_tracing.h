@@ -1,4 +1,4 @@
-// The locally global lines of one box, chunk by chunk (design.md section 5):
+// The locally global lines of one box, chunk by chunk (docs/method.md, 5):
 // which lines a chunk holds is fixed by the config alone (box, line index,
 // per-chunk random stream), so a store traced in shards, on any number of
 // threads, holds the same lines. A line is intersected with the box's own

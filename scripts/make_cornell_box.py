@@ -4,7 +4,7 @@ measured data of the Cornell Program of Computer Graphics, in metres, with RGB
 reflectance and emitted radiance derived from the published spectra.
 
 Derivation (docs/colour.md): CIE 1931 colour matching functions (the
-multi-lobe fit of Wyman, Sloan and Shirley 2013, as src/color.cpp uses),
+multi-lobe fit of Wyman, Sloan and Shirley 2013, as src/scene/color.cpp uses),
 XYZ to linear Rec. 709 RGB, white-balanced so that a flat spectrum is grey.
   reflectance  rho_c = RGB_c(rho(l)) / RGB_c(1)
   emission     L_c   = RGB_c(L(l)) / RGB_c(1) * 300 nm

@@ -1,4 +1,4 @@
-// The line store as the solver reads it (design.md sections 6 and 7): the
+// The line store as the solver reads it (docs/method.md, 6 and 7): the
 // manifest checked against this run's scene and config, the hierarchy rebuilt
 // and checked against the one the store was made with, every box file opened
 // and checked, and per box what its passes need: its own faces (numbered

@@ -1,6 +1,6 @@
 // The first shot: local lines from every emitting face, cosine distributed,
 // in number proportional to its emitted power; the nearest face hit keeps rho
-// of the power as accumulated and unshot power (design.md section 7).
+// of the power as accumulated and unshot power (docs/method.md, 7).
 #pragma once
 
 #include <cstdint>

@@ -205,7 +205,7 @@ bool chunk_fits(const BoxInputs& in, const linestore::DecodedChunk& chunk) {
   return true;
 }
 
-// One line of the box in both directions (design.md section 7): every face,
+// One line of the box in both directions (docs/method.md, 7): every face,
 // wall AR and child box on it sends before anything is received.
 // CH: the channel count (1 or 3), fixed at compile time so the per-channel
 // loops unroll.

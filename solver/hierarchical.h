@@ -1,4 +1,4 @@
-// Hierarchical Multipath over the stored lines (design.md section 7, paper
+// Hierarchical Multipath over the stored lines (docs/method.md, 7, paper
 // figure 5): one iteration is MP(root); MP(S) is one pass over S's stored
 // lines in which S's own faces, the ARs of S's walls (power that entered S)
 // and the ARs of S's child boxes (power that left them) send, and power

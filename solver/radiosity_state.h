@@ -24,7 +24,7 @@ struct RadiosityState {
   std::vector<double> emitted_power; // face * channels, W
   std::vector<double> phi;           // face * channels, accumulated power W
   std::vector<double> unshot;        // face * channels, W
-  // Power held in the ARs of subscene walls (design.md section 7): entering
+  // Power held in the ARs of subscene walls (docs/method.md, 7): entering
   // a box (In) and leaving it (Out), AR * channels, W; empty without subscenes.
   std::vector<double> ar_in, ar_out;
   EnergyTotals energy;

@@ -1,4 +1,4 @@
-// Multipath transport along one line: the pass semantics of design.md section 7
+// Multipath transport along one line: the pass semantics of docs/method.md, 7
 // on a sorted list of patch crossings. Shared by every solver method.
 #pragma once
 

@@ -78,7 +78,7 @@ class Builder {
     scene_area_ = mesh.bounds.surface_area();
     // An object too large to group whole (a file whose furniture is one
     // object, or the whole scene in one) is split into its connected parts,
-    // which are the items instead (design.md section 3).
+    // which are the items instead (docs/method.md, 3).
     for (int o = 0; o < objects; ++o) {
       Bounds b;
       for (uint32_t p : object_patches_[o])
