@@ -170,9 +170,15 @@ std::vector<int> face_proxies(const PatchMesh& mesh, const SceneBox& sb, const S
 }  // namespace
 
 BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
-  const fs::path dir = options.store.dir;
-  const fs::path manifest_path = dir / "manifest.json";
+  const fs::path manifest_path = options.store.dir / "manifest.json";
   manifest_ = linestore::read_manifest(manifest_path);
+  check_against(options, mesh, manifest_path);
+  lay_out_boxes(mesh);
+  open_files(options.store.dir, manifest_path);
+  for (size_t b = 0; b < boxes_.size(); ++b) derive_box_data(mesh, b);
+}
+
+void BoxStore::check_against(const Options& options, const PatchMesh& mesh, const fs::path& manifest_path) {
   const std::string mismatch = linestore::identity_mismatch(store_identity(options, mesh), manifest_.identity);
   if (!mismatch.empty())
     throw InputError(fmt::format("{}: the store does not match this scene and config: {}; run mpath-preprocess again",
@@ -193,7 +199,9 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
     if (differs(b))
       throw InputError(fmt::format("{}: box {} of the store differs from the one this scene and config build; run "
                                    "mpath-preprocess again", manifest_path.string(), b));
+}
 
+void BoxStore::lay_out_boxes(const PatchMesh& mesh) {
   boxes_.resize(hierarchy_.boxes.size());
   for (size_t b = 0; b < boxes_.size(); ++b) {
     const SceneBox& sb = hierarchy_.boxes[b];
@@ -217,7 +225,9 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
     }
     box.counts.resize(sb.patches.size(), sb.ar_count(), offset);
   }
+}
 
+void BoxStore::open_files(const fs::path& dir, const fs::path& manifest_path) {
   // Files, box by box, in line order.
   auto files = manifest_.files;
   std::sort(files.begin(), files.end(),
@@ -258,39 +268,40 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
     box.bytes += f.bytes;
   }
   for (size_t b = 0; b < boxes_.size(); ++b)
-    if (next_line[b] != recorded[b].lines)
+    if (next_line[b] != manifest_.boxes[b].lines)
       throw InputError(fmt::format("{}: the files of box {} hold {} lines of {} (a shard is missing)",
-                                   manifest_path.string(), b, next_line[b], recorded[b].lines));
+                                   manifest_path.string(), b, next_line[b], manifest_.boxes[b].lines));
 
-  for (size_t b = 0; b < boxes_.size(); ++b) {
-    const SceneBox& sb = hierarchy_.boxes[b];
-    StoreBox& box = boxes_[b];
-    box.face_crossings.assign(box.face_global.size(), 0.0);
-    for (size_t k = 0; k < box.local_faces.size(); ++k)
-      for (int face : box.local_faces[k])
-        if (face >= 0) box.face_crossings[face] = box.counts.patch_crossings[k];
-    box.face_proxy = face_proxies(mesh, sb, box);
-    std::vector<double> c = box.face_crossings;
-    double coverage = 0;
-    if (!c.empty()) {
-      std::nth_element(c.begin(), c.begin() + c.size() / 2, c.end());
-      coverage = c[c.size() / 2] > 0 ? 16.0 / c[c.size() / 2] : 1.0;
-    }
-    if (box.lines > 0) coverage = std::max(coverage, 2.0 * sb.ar_count() / static_cast<double>(box.lines));
-    if (b > 0) coverage = std::max(coverage, kSubsceneCoverage);
-    box.coverage = std::min(1.0, coverage);
-    if (b == 0) continue;
-    box.transmittance = transmittances(sb, box.counts.wall_lines, box.counts.wall_open);
-    std::vector<bool> carried(sb.ar_count());
-    for (uint32_t r = 0; r < sb.ar_count(); ++r) carried[r] = box.counts.wall_lines[r] > box.counts.wall_open[r];
-    box.in_target = redirect_targets(sb, carried);
-    // Out power leaves along the parent's lines that cross the AR.
-    const StoreBox& parent = boxes_[sb.parent];
-    const auto& siblings = hierarchy_.boxes[sb.parent].children;
-    const size_t k = static_cast<size_t>(std::find(siblings.begin(), siblings.end(), static_cast<int>(b)) - siblings.begin());
-    for (uint32_t r = 0; r < sb.ar_count(); ++r) carried[r] = parent.counts.child_crossings[parent.child_ar_base[k] + r] > 0;
-    box.out_target = redirect_targets(sb, carried);
+}
+
+void BoxStore::derive_box_data(const PatchMesh& mesh, size_t b) {
+  const SceneBox& sb = hierarchy_.boxes[b];
+  StoreBox& box = boxes_[b];
+  box.face_crossings.assign(box.face_global.size(), 0.0);
+  for (size_t k = 0; k < box.local_faces.size(); ++k)
+    for (int face : box.local_faces[k])
+      if (face >= 0) box.face_crossings[face] = box.counts.patch_crossings[k];
+  box.face_proxy = face_proxies(mesh, sb, box);
+  std::vector<double> c = box.face_crossings;
+  double coverage = 0;
+  if (!c.empty()) {
+    std::nth_element(c.begin(), c.begin() + c.size() / 2, c.end());
+    coverage = c[c.size() / 2] > 0 ? 16.0 / c[c.size() / 2] : 1.0;
   }
+  if (box.lines > 0) coverage = std::max(coverage, 2.0 * sb.ar_count() / static_cast<double>(box.lines));
+  if (b > 0) coverage = std::max(coverage, kSubsceneCoverage);
+  box.coverage = std::min(1.0, coverage);
+  if (b == 0) return;
+  box.transmittance = transmittances(sb, box.counts.wall_lines, box.counts.wall_open);
+  std::vector<bool> carried(sb.ar_count());
+  for (uint32_t r = 0; r < sb.ar_count(); ++r) carried[r] = box.counts.wall_lines[r] > box.counts.wall_open[r];
+  box.in_target = redirect_targets(sb, carried);
+  // Out power leaves along the parent's lines that cross the AR.
+  const StoreBox& parent = boxes_[sb.parent];
+  const auto& siblings = hierarchy_.boxes[sb.parent].children;
+  const size_t k = static_cast<size_t>(std::find(siblings.begin(), siblings.end(), static_cast<int>(b)) - siblings.begin());
+  for (uint32_t r = 0; r < sb.ar_count(); ++r) carried[r] = parent.counts.child_crossings[parent.child_ar_base[k] + r] > 0;
+  box.out_target = redirect_targets(sb, carried);
 }
 
 uint64_t BoxStore::total(uint64_t StoreBox::*field) const {

@@ -72,6 +72,13 @@ class BoxStore {
   uint64_t chunk_lines(int box, uint64_t chunk) const { return boxes_[box].chunk_lines[chunk]; }
 
  private:
+  // The steps of the constructor: the manifest against this scene, config and
+  // hierarchy; each box's faces and AR offsets; every file opened and checked
+  // against the manifest, its counts summed; what the passes derive from them.
+  void check_against(const Options& options, const PatchMesh& mesh, const std::filesystem::path& manifest_path);
+  void lay_out_boxes(const PatchMesh& mesh);
+  void open_files(const std::filesystem::path& dir, const std::filesystem::path& manifest_path);
+  void derive_box_data(const PatchMesh& mesh, size_t b);
   uint64_t total(uint64_t StoreBox::*field) const;
 
   linestore::Manifest manifest_;

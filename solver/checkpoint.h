@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-#include "classic.h"
+#include "iteration.h"
 #include "config.h"
 #include "radiosity_state.h"
 
@@ -23,5 +23,12 @@ void write_checkpoint(const std::filesystem::path& path, const std::string& key,
 // when it is damaged or was made with other settings.
 void read_checkpoint(const std::filesystem::path& path, const std::string& key, RadiosityState& state,
                      IterationLog& log);
+
+// Where a solve's checkpoints go and the key they are written with.
+struct Checkpoint {
+  std::filesystem::path path;
+  std::string key;
+  void save(const RadiosityState& state, const IterationLog& log) const { write_checkpoint(path, key, state, log); }
+};
 
 }  // namespace mpath

@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cmath>
 
-#include "first_shot.h"
 #include "progress.h"
 #include "sampling.h"
 #include "transport.h"
@@ -18,6 +17,13 @@ namespace {
 constexpr unsigned kGlobalLineStream = 2;
 
 }  // namespace
+
+std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines) {
+  const double box_area = line_box(mesh.bounds).surface_area();
+  std::vector<double> c(mesh.face_count());
+  for (size_t f = 0; f < c.size(); ++f) c[f] = lines * 2.0 * mesh.face_area(static_cast<int>(f)) / box_area;
+  return c;
+}
 
 uint64_t coverage_lines(const PatchMesh& mesh) {
   std::vector<double> areas;
@@ -62,25 +68,6 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
   });
   progress.finish();
   return finish_pass(in, acc, state, pass, start);
-}
-
-void iterate(const Options& options, const RadiosityState& state, IterationLog& log, const PassFunction& run_pass,
-             const std::function<void()>& after_pass) {
-  const double emitted = state.emitted_total();
-  if (log.first_unshot < 0) log.first_unshot = state.unshot_total();
-  for (unsigned pass = static_cast<unsigned>(log.passes.size()) + 1; pass <= static_cast<unsigned>(options.solver.iterations);
-       ++pass) {
-    if (!(emitted > 0) || state.remaining_fraction() < options.solver.tolerance) break;
-    const PassStats p = run_pass(pass);
-    spdlog::info("pass {}: {} lines, {} hits, {:.2f} s, unshot {:.3e} of emitted{}", p.pass, p.lines, p.hits, p.seconds,
-                 p.unshot_fraction,
-                 state.ar_in.empty() ? std::string() : fmt::format(" (held in ARs {:.3e})", state.held_total() / emitted));
-    log.passes.push_back(p);
-    log.lines += p.lines;
-    log.hits += p.hits;
-    if (after_pass) after_pass();
-  }
-  log.converged = !(emitted > 0) || state.remaining_fraction() < options.solver.tolerance;
 }
 
 uint64_t classic_pass_lines(const Options& options, const PatchMesh& mesh, const IterationLog& log,

@@ -12,28 +12,17 @@
 #include "config.h"
 #include "radiosity_state.h"
 #include "tracer.h"
+#include "iteration.h"
 #include "transport.h"
 
 namespace mpath {
 
-struct IterationLog {
-  std::vector<PassStats> passes;
-  uint64_t lines = 0;
-  uint64_t hits = 0;
-  bool converged = false;
-  double first_unshot = -1;  // unshot power before the first pass (W, summed over channels)
-};
-
-// Runs passes after those already in `log` until unshot / emitted <
-// solver.tolerance or solver.iterations passes in all, calling `after_pass`
-// after each (checkpoints).
-using PassFunction = std::function<PassStats(unsigned pass)>;
-void iterate(const Options& options, const RadiosityState& state, IterationLog& log, const PassFunction& run_pass,
-             const std::function<void()>& after_pass = {});
-
 // Lines of classic pass k: lines.total x U_k / U_1, at least coverage_lines.
 uint64_t classic_pass_lines(const Options& options, const PatchMesh& mesh, const IterationLog& log,
                             const RadiosityState& state);
+
+// Forecast crossings of each face by N lines uniform over the scene box: N 2A/S.
+std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines);
 
 // Lines that cross the median face about 16 times: the fewest a pass casts,
 // so that what is left unshot keeps moving.

@@ -50,13 +50,6 @@ std::vector<double> emitter_crossings(const Options& options, std::vector<double
   return crossings;
 }
 
-std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines) {
-  const double box_area = line_box(mesh.bounds).surface_area();
-  std::vector<double> c(mesh.face_count());
-  for (size_t f = 0; f < c.size(); ++f) c[f] = lines * 2.0 * mesh.face_area(static_cast<int>(f)) / box_area;
-  return c;
-}
-
 FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long budget,
                           unsigned long long seed, int shards, const std::vector<double>& global_crossings,
                           const SubsceneNearest* accelerated) {

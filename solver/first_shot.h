@@ -30,8 +30,6 @@ struct FirstShotStats {
 // The `global_crossings` that first_shot.mode asks for, from per-face
 // crossing counts of the first pass (forecast or counted).
 std::vector<double> emitter_crossings(const Options& options, std::vector<double> crossings);
-// Forecast crossings of each face by N lines uniform over the scene box: N 2A/S.
-std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines);
 
 class SubsceneNearest;
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "box_store.h"
-#include "classic.h"
+#include "iteration.h"
 #include "radiosity_state.h"
 #include "tracer.h"
 #include "transport.h"

@@ -1,0 +1,43 @@
+// report.json of mpath-solve: what a run did, assembled from what each step
+// measured (docs/user-guide.md, "Outputs").
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+#include "box_store.h"
+#include "config.h"
+#include "first_shot.h"
+#include "hierarchical.h"
+#include "iteration.h"
+#include "prepared_scene.h"
+#include "radiosity_state.h"
+
+namespace mpath {
+
+// Seconds per phase of a solve.
+struct SolveTimings {
+  double store = 0, bvh = 0, iterations = 0, outputs = 0, total = 0;
+};
+
+// What a solve measured, for its report.
+struct SolveRecord {
+  std::string command_line;
+  int threads = 1;
+  SolveTimings timings;
+  FirstShotStats shot;
+  bool resumed = false;
+  IterationLog iterations;
+  uint64_t hits_before = 0;      // hits of passes restored from a checkpoint (not timed by this run)
+  uint64_t uncarried_lines = 0;  // local lines for power no stored line can carry
+  std::vector<BoxPassStats> box_stats;
+  std::vector<std::string> outputs;
+};
+
+// `store` is null for the classic method.
+nlohmann::json solve_report(const Options& options, const PreparedScene& prepared, const RadiosityState& state,
+                            const BoxStore* store, const SolveRecord& record);
+
+}  // namespace mpath
