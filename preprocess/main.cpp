@@ -3,7 +3,7 @@
 #include "program.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"mpath-preprocess: traces and stores the global lines of a scene"};
+  CLI::App app{"mpath-preprocess: traces and stores the global lines of a scene", "mpath-preprocess"};
   mpath::ProgramFlags flags;
   std::string shard = "1/1";
   bool print_hierarchy = false;
@@ -11,7 +11,7 @@ int main(int argc, char** argv) {
   app.add_option("--shard", shard, "trace part i of n (i/n) of the lines; run every part, in any order");
   app.add_flag("--print-hierarchy", print_hierarchy, "print the hierarchy of subscenes (boxes, depth, objects, "
                "polygons, quotient, lines per box) and stop");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = mpath::parse_command_line(app, argc, argv); status >= 0) return status;
   const char* advice = "finished shards are kept and verified; run again to finish the store";
   return mpath::run_program("mpath-preprocess", advice, flags, [&](const mpath::Options& options) {
     mpath::run_preprocess(options, mpath::parse_shard(shard), flags.dry_run, print_hierarchy);

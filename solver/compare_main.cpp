@@ -3,7 +3,7 @@
 #include "program.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"mpath-compare: error of a solution against a reference on the same mesh, with error images"};
+  CLI::App app{"mpath-compare: error of a solution against a reference on the same mesh, with error images", "mpath-compare"};
   mpath::ProgramFlags flags;
   mpath::CompareFlags compare;
   bool no_images = false;
@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_flag("--no-images", no_images, "numbers only");
   mpath::add_common_flags(app, flags);
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = mpath::parse_command_line(app, argc, argv); status >= 0) return status;
   compare.result = result;
   compare.reference = reference;
   compare.images = !no_images;

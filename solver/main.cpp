@@ -3,12 +3,12 @@
 #include "solve.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"mpath-solve: hierarchical Multipath radiosity solver"};
+  CLI::App app{"mpath-solve: hierarchical Multipath radiosity solver", "mpath-solve"};
   mpath::ProgramFlags flags;
   bool resume = false;
   mpath::add_common_flags(app, flags);
   app.add_flag("--resume", resume, "continue from the last checkpoint in output.dir");
-  CLI11_PARSE(app, argc, argv);
+  if (const int status = mpath::parse_command_line(app, argc, argv); status >= 0) return status;
   const char* advice = "the passes finished so far are in output.dir/checkpoint.bin: run again with --resume";
   return mpath::run_program("mpath-solve", advice, flags, [&](const mpath::Options& options) {
     mpath::SolveFlags solve;

@@ -1,9 +1,10 @@
 // mpath-solve as a user runs it: outputs, flags and every error message a
-// user can meet from bad input, each with a non-zero exit.
+// user can meet from bad input, each with exit status 1.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 
+#include "mpath_version.h"
 #include "test_util.h"
 
 namespace mpath {
@@ -81,7 +82,7 @@ void expect_failure(const std::string& scene_name, const std::string& scene_text
   write_file(dir / "run.toml", "scene.file = \"" + (scene_name.empty() ? "missing.obj" : scene_name) +
                                    "\"\nsolver.method = \"classic\"\noutput.dir = \"out\"\n" + config_extra);
   const RunResult r = solve((dir / "run.toml").string() + " -q " + overrides);
-  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("mpath-solve: error: "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(expected), std::string::npos) << "wanted: " << expected << "\ngot: " << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out/solution.ply"));
@@ -108,13 +109,32 @@ TEST(Cli, BadInputGivesAClearErrorAndNoResult) {
 
 TEST(Cli, MissingConfigAndUnwritableOutputAreErrors) {
   RunResult r = solve("/nonexistent/run.toml");
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.output.find("config file not found"), std::string::npos) << r.output;
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("mpath-solve: error: /nonexistent/run.toml: config file not found"), std::string::npos)
+      << r.output;
   TempDir dir;
   write_file(dir / "blocker", "a file where the output folder should go");
   r = solve(kCornell + " -q lines.total=1000 first_shot.lines=1000 output.dir=" + (dir / "blocker").string());
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.output.find("mpath-solve: error: "), std::string::npos) << r.output;
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("mpath-solve: error: " + (dir / "blocker").string()), std::string::npos) << r.output;
+}
+
+// Every program: --version prints its name and version; a usage error (an
+// unknown flag, no config, a flag without its value) exits 1 with
+// "PROGRAM: error: ..." like any other error.
+TEST(Cli, EveryProgramHasVersionAndUsageErrorsExitOne) {
+  for (const std::string name : {"mpath-solve", "mpath-preprocess", "mpath-compare"}) {
+    const std::string bin = test::program_bin(name);
+    RunResult r = test::run(bin + " --version");
+    EXPECT_EQ(r.exit_code, 0) << name << ": " << r.output;
+    EXPECT_EQ(r.output.rfind(name + " " + MPATH_VERSION, 0), 0u) << r.output;
+    const std::string needs = name == "mpath-compare" ? "--result a --reference b " + kCornell : kCornell;
+    for (const std::string& args : {needs + " --no-such-flag", std::string(), needs + " --log-level"}) {
+      r = test::run(bin + " " + args);
+      EXPECT_EQ(r.exit_code, 1) << name << " " << args << ": " << r.output;
+      EXPECT_EQ(r.output.rfind(name + ": error: ", 0), 0u) << name << " " << args << ": " << r.output;
+    }
+  }
 }
 
 }  // namespace

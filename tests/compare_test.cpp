@@ -103,7 +103,7 @@ TEST(Compare, ReaderNamesWhatIsWrongWithAFile) {
 }
 
 const std::string kRoom = std::string(MPATH_SOURCE_DIR) + "/configs/room.toml";
-std::string compare_bin() { return (std::filesystem::path(test::solve_bin()).parent_path() / "mpath-compare").string(); }
+std::string compare_bin() { return test::program_bin("mpath-compare"); }
 
 TEST(ComparePrograms, TwoSeedsOfTheShippedRoomAndItsErrorImage) {
   TempDir dir;

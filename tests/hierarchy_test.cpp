@@ -398,11 +398,8 @@ namespace {
 const std::string kRoom = std::string(MPATH_SOURCE_DIR) + "/configs/room.toml";
 const std::string kRoomSmall = " lines.total=300000 store.chunk_lines=8192 first_shot.lines=100000 output.png=false output.exr=false -q";
 
-std::string program(const char* name) {
-  return (std::filesystem::path(test::solve_bin()).parent_path() / name).string();
-}
 test::RunResult preprocess_room(const std::string& args) {
-  return test::run(program("mpath-preprocess") + " " + kRoom + kRoomSmall + " " + args);
+  return test::run(test::program_bin("mpath-preprocess") + " " + kRoom + kRoomSmall + " " + args);
 }
 test::RunResult solve_room(const std::string& args) {
   return test::run(test::solve_bin() + " " + kRoom + kRoomSmall + " " + args);
@@ -410,7 +407,7 @@ test::RunResult solve_room(const std::string& args) {
 
 TEST(HierarchicalPrograms, PrintHierarchyReportAndEnergyOnTheShippedRoom) {
   TempDir dir;
-  test::RunResult r = test::run(program("mpath-preprocess") + " " + kRoom + " --print-hierarchy -q");
+  test::RunResult r = test::run(test::program_bin("mpath-preprocess") + " " + kRoom + " --print-hierarchy -q");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("box 0 (root)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("box 1: depth 1"), std::string::npos) << r.output;
@@ -492,7 +489,7 @@ TEST(HierarchicalPrograms, Office2IsWithinTheMeasuredBoundOfALongClassicRun) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string h = common + " solver.method=hierarchical lines.total=2000000 first_shot.lines=500000 store.dir=" +
                         (dir / "store").string();
-  r = test::run(program("mpath-preprocess") + " " + config + h);
+  r = test::run(test::program_bin("mpath-preprocess") + " " + config + h);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   r = test::run(test::solve_bin() + " " + config + h + " output.dir=" + (dir / "h").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;

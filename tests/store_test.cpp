@@ -21,13 +21,10 @@ using test::TempDir;
 const std::string kCornell = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box.toml";
 const std::string kSmall = " lines.total=150000 store.chunk_lines=4096 first_shot.lines=50000";
 
-std::string bin(const char* name) {
-  return (std::filesystem::path(test::solve_bin()).parent_path() / name).string();
-}
 // Quiet unless the arguments ask for a log level.
 std::string quiet(const std::string& args) { return args.find("--log-level") == std::string::npos ? " -q " + args : " " + args; }
 RunResult preprocess(const std::string& args) {
-  return test::run(bin("mpath-preprocess") + " " + kCornell + kSmall + " solver.method=multipath" + quiet(args));
+  return test::run(test::program_bin("mpath-preprocess") + " " + kCornell + kSmall + " solver.method=multipath" + quiet(args));
 }
 RunResult solve(const std::string& args) {
   return test::run(test::solve_bin() + " " + kCornell + kSmall + " solver.method=multipath output.png=false" + quiet(args));
@@ -162,7 +159,7 @@ TEST(Store, InterruptedProgramsRemoveTheirTemporariesAndSayWhatToDo) {
   TempDir dir;
   const auto store = dir / "store";
   // Interrupt preprocessing while it traces (the partial file exists).
-  const std::string pre = bin("mpath-preprocess") + " " + kCornell + " -q lines.total=50000000 store.dir=" + store.string();
+  const std::string pre = test::program_bin("mpath-preprocess") + " " + kCornell + " -q lines.total=50000000 store.dir=" + store.string();
   RunResult r = test::run("bash -c '" + pre + " & pid=$!; for i in $(seq 2000); do [ -f " +
                           (store / ".box0000.lines.partial").string() +
                           " ] && break; sleep 0.005; done; sleep 0.2; kill -INT $pid; wait $pid; echo exit $?'");

@@ -63,6 +63,7 @@ RunResult run(const std::string& command) {
 }
 
 std::string solve_bin() { return MPATH_SOLVE_BIN; }
+std::string program_bin(const std::string& name) { return (fs::path(solve_bin()).parent_path() / name).string(); }
 fs::path shared_scenes() { return MPATH_SHARED_SCENES; }
 
 int add_material(Scene& scene, const std::string& name, double rho, double radiance, bool two_sided) {

@@ -37,6 +37,8 @@ struct RunResult {
 };
 RunResult run(const std::string& command);
 std::string solve_bin();
+// Path of one of mpath's programs ("mpath-preprocess", "mpath-compare", ...).
+std::string program_bin(const std::string& name);
 std::filesystem::path shared_scenes();
 
 int add_material(Scene& scene, const std::string& name, double rho, double radiance, bool two_sided = false);

@@ -13,6 +13,7 @@
 
 #include "config.h"
 #include "error.h"
+#include "mpath_version.h"
 #include "interrupt.h"
 #include "progress.h"
 
@@ -26,6 +27,8 @@ struct ProgramFlags {
 };
 
 inline void add_common_flags(CLI::App& app, ProgramFlags& f) {
+  app.set_version_flag("--version", std::string(app.get_name()) + " " + MPATH_VERSION + " (" + MPATH_GIT_COMMIT + ")",
+                       "print the version and exit");
   app.add_option("config", f.config, "TOML config file")->required();
   app.add_option("overrides", f.overrides, "key=value overrides of config values (dotted TOML keys)");
   app.add_flag("--print-config", f.print_config, "print the effective config and exit");
@@ -33,6 +36,25 @@ inline void add_common_flags(CLI::App& app, ProgramFlags& f) {
   app.add_flag("-q,--quiet", f.quiet, "no progress and no log below warnings");
   app.add_option("--log-level", f.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
+}
+
+// Parses the command line. --help and --version print and give exit status
+// 0; a usage error prints `NAME: error: ...` and gives 1. Returns the exit
+// status when the program should stop, -1 when it should go on.
+inline int parse_command_line(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "%s: error: %s (see %s --help)\n", app.get_name().c_str(), e.what(), app.get_name().c_str());
+    return 1;
+  }
+  return -1;
 }
 
 // Sets up logging and interrupt handling (`advice`: what to do after an
@@ -55,6 +77,11 @@ int run_program(const char* name, const char* advice, const ProgramFlags& f, Bod
     body(options);
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s: error: %s\n", name, e.what());
+    return 1;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A folder that cannot be made or a file that cannot be written: the
+    // user's paths or disk, not mpath's state.
+    std::fprintf(stderr, "%s: error: %s: %s\n", name, e.path1().string().c_str(), e.code().message().c_str());
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: error: %s\n", name, e.what());
