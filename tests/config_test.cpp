@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "config_keys.h"
 #include "error.h"
 #include "test_util.h"
 
@@ -112,6 +113,32 @@ TEST(Config, PrintedConfigLoadsBackUnchanged) {
   write_file(dir / "printed.toml", options_to_toml(a));
   const Options b = load_options(dir / "printed.toml", {});
   EXPECT_EQ(options_to_toml(a), options_to_toml(b));
+}
+
+// The user guide's key table is the code's: every key parsed and printed has
+// its row, with the default the code uses.
+TEST(Config, UserGuideKeyTableIsTheCodesTable) {
+  const std::string guide = test::read_file(std::filesystem::path(MPATH_SOURCE_DIR) / "docs/user-guide.md");
+  const std::string begin = "<!-- config keys:", end = "<!-- end of config keys -->";
+  const size_t a = guide.find(begin), b = guide.find(end);
+  ASSERT_NE(a, std::string::npos);
+  ASSERT_NE(b, std::string::npos);
+  const size_t table = guide.find('\n', a) + 1;
+  EXPECT_EQ(guide.substr(table, b - table), config_keys_markdown())
+      << "docs/user-guide.md: replace the key table with the output of mpath-solve --list-keys";
+}
+
+// Every key of the table is found by its name and printed by --print-config.
+TEST(Config, EveryKeyOfTheTableIsPrinted) {
+  TempDir dir;
+  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n[[camera]]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\n");
+  const toml::table printed = toml::parse(options_to_toml(load_options(dir / "run.toml", {})));
+  for (const ConfigKey& k : config_keys()) {
+    EXPECT_EQ(find_config_key(k.key), &k);
+    EXPECT_FALSE(k.meaning.empty()) << k.key;
+    EXPECT_TRUE(printed.at_path(k.key)) << k.key << " is not printed";
+  }
+  EXPECT_EQ(find_config_key("lines.totl"), nullptr);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "config.h"
+#include "config_keys.h"
 #include "error.h"
 #include "mpath_version.h"
 #include "interrupt.h"
@@ -32,6 +33,13 @@ inline void add_common_flags(CLI::App& app, ProgramFlags& f) {
   app.add_option("config", f.config, "TOML config file")->required();
   app.add_option("overrides", f.overrides, "key=value overrides of config values (dotted TOML keys)");
   app.add_flag("--print-config", f.print_config, "print the effective config and exit");
+  app.add_flag_callback(
+      "--list-keys",
+      [] {
+        std::cout << config_keys_markdown();
+        throw CLI::Success();
+      },
+      "print every config key with its default and meaning, and exit");
   app.add_flag("--dry-run", f.dry_run, "check config and scene, then stop");
   app.add_flag("-q,--quiet", f.quiet, "no progress and no log below warnings");
   app.add_option("--log-level", f.log_level, "trace, debug, info, warn, error")
@@ -50,6 +58,8 @@ inline int parse_command_line(CLI::App& app, int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
+  } catch (const CLI::Success&) {
+    return 0;
   } catch (const CLI::ParseError& e) {
     std::fprintf(stderr, "%s: error: %s (see %s --help)\n", app.get_name().c_str(), e.what(), app.get_name().c_str());
     return 1;

@@ -292,6 +292,8 @@ std::string inline_toml(const toml::node& node) {
   std::ostringstream out;
   if (const toml::table* t = node.as_table()) out << (t->empty() ? "{}" : "(a table)");
   else if (const toml::array* a = node.as_array()) out << (a->empty() ? "[]" : "(an array)");
+  else if (const auto d = node.value_exact<double>()) out << fmt::format("{}", *d);  // shortest exact form
+  else if (const auto text = node.value_exact<std::string>()) out << '"' << *text << '"';
   else node.visit([&](const auto& v) { out << v; });
   return out.str();
 }
