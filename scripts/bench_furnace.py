@@ -24,10 +24,10 @@ def run(work, rho, lines, sequence, mode, seed):
                            f"lines.total={lines}", f"lines.sequence={sequence}", f"first_shot.mode={mode}",
                            f"lines.seed={seed}", "first_shot.lines=1000000", f"output.dir={out}"])
     faces = read_solution(os.path.join(out, "solution.ply"))
-    errors = [f["B_r"] * (1 - rho) / 3.141592653589793 - 1 for f in faces]
+    errors = faces["B_r"].astype(float) * (1 - rho) / 3.141592653589793 - 1
     report = json.load(open(os.path.join(out, "report.json")))
-    return {"rho": rho, "lines": lines, "sequence": sequence, "first_shot": mode, "seed": seed, "faces": len(faces),
-            "mean_abs_error": sum(abs(e) for e in errors) / len(errors), "mean_error": sum(errors) / len(errors),
+    return {"rho": rho, "lines": lines, "sequence": sequence, "first_shot": mode, "seed": seed, "faces": len(errors),
+            "mean_abs_error": float(abs(errors).mean()), "mean_error": float(errors.mean()),
             "seconds": report["timings"]["total"], "global_lines": report["lines"]["global"],
             "local_lines": report["lines"]["local"]}
 
