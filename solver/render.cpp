@@ -50,14 +50,24 @@ std::array<double, 3> VertexRadiosity::at(int patch, int side, const Vec3& p) co
   std::array<uint32_t, 3> tri{q.v[0], q.v[1], q.v[2]};
   auto w = barycentric(mesh_.vertices[tri[0]], mesh_.vertices[tri[1]], mesh_.vertices[tri[2]], p);
   if (!q.is_triangle() && std::min({w[0], w[1], w[2]}) < 0) {
-    tri = {q.v[0], q.v[2], q.v[3]};
-    w = barycentric(mesh_.vertices[tri[0]], mesh_.vertices[tri[1]], mesh_.vertices[tri[2]], p);
+    // The quad's other triangle, if the point lies more inside it.
+    const std::array<uint32_t, 3> other{q.v[0], q.v[2], q.v[3]};
+    const auto w2 = barycentric(mesh_.vertices[other[0]], mesh_.vertices[other[1]], mesh_.vertices[other[2]], p);
+    if (std::min({w2[0], w2[1], w2[2]}) > std::min({w[0], w[1], w[2]})) {
+      tri = other;
+      w = w2;
+    }
+  }
+  // A hit a rounding error outside the patch takes the nearest point on it:
+  // weights clipped at 0 and scaled back to a sum of 1.
+  if (std::min({w[0], w[1], w[2]}) < 0) {
+    double sum = 0;
+    for (double& wk : w) sum += (wk = std::max(wk, 0.0));
+    for (double& wk : w) wk = sum > 0 ? wk / sum : 1.0 / 3;
   }
   std::array<double, 3> out{};
-  for (int k = 0; k < 3; ++k) {
-    const double wk = std::clamp(w[k], 0.0, 1.0);
-    for (int c = 0; c < 3; ++c) out[c] += wk * values_[(side * nv + tri[k]) * 3 + c];
-  }
+  for (int k = 0; k < 3; ++k)
+    for (int c = 0; c < 3; ++c) out[c] += w[k] * values_[(side * nv + tri[k]) * 3 + c];
   return out;
 }
 
