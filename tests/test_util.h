@@ -40,6 +40,10 @@ std::string solve_bin();
 // Path of one of mpath's programs ("mpath-preprocess", "mpath-compare", ...).
 std::string program_bin(const std::string& name);
 std::filesystem::path shared_scenes();
+// A scene under ../shared/scenes (the public scenes the project is cloned
+// beside); when it is absent the test fails with what is missing and how to
+// get it, and the path is empty.
+std::filesystem::path shared_scene(const std::string& relative);
 
 int add_material(Scene& scene, const std::string& name, double rho, double radiance, bool two_sided = false);
 int add_object(Scene& scene, const std::string& name);
