@@ -48,7 +48,11 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
   using linestore::Event;
   Rng rng = make_rng(seed_, kStoreLineStream, (static_cast<unsigned long long>(box_index_) << 40) + chunk);
   const uint64_t first = first_line(chunk), n = lines_in(chunk);
-  const bool root = box_index_ == 0;
+  // A subscene's lines end at its walls, where they cross its ARs, unless the
+  // boxes are transparent (hierarchy.transport = "lines"): then a line of any
+  // box records the patches inside it and nothing else.
+  const bool walls = box_index_ != 0 && !hierarchy_.transparent;
+  const size_t child_count = hierarchy_.transparent ? 0 : box_.children.size();
   // Records are built in a per-thread scratch whose event lists keep their
   // memory from chunk to chunk, then swapped into `out` in their stored order.
   thread_local std::vector<linestore::LineRecord> scratch;
@@ -72,7 +76,7 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
     record.entry_ar = record.exit_ar = linestore::kNoAr;
     record.events.clear();
     BoxCrossing wall{};
-    if (!root) {
+    if (walls) {
       // A subscene's line: its ends are where it crosses the box's walls.
       if (!cross_box(box_.bounds, line.org, line.dir, wall)) continue;
       record.entry_ar = box_.ar_at(wall.face_in, line.org + line.dir * wall.t_in, line.dir);
@@ -81,7 +85,7 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
     tracer_.all_hits(line.org, line.dir, line.length, hits);
     order_ties(mesh_, tracer_.tie_epsilon(), hits);
     children.clear();
-    for (size_t k = 0; k < box_.children.size(); ++k) {
+    for (size_t k = 0; k < child_count; ++k) {
       const SceneBox& child = hierarchy_.boxes[box_.children[k]];
       BoxCrossing c;
       if (!cross_box(child.bounds, line.org, line.dir, c)) continue;
@@ -107,7 +111,7 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
       counts.patch_crossings[local]++;
     }
     while (next_child < children.size()) record.events.push_back(children[next_child++].event);
-    if (!root) {
+    if (walls) {
       counts.wall_lines[record.entry_ar]++;
       counts.wall_lines[record.exit_ar]++;
       if (record.events.empty()) {

@@ -1,5 +1,9 @@
 #include "box_store.h"
 
+#include <tbb/task_arena.h>
+
+#include "line_sets.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -176,6 +180,9 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
   lay_out_boxes(mesh);
   open_files(options.store.dir, manifest_path);
   for (size_t b = 0; b < boxes_.size(); ++b) derive_box_data(mesh, b);
+  if (hierarchy_.transparent)
+    line_sets_ = std::make_shared<const LineSets>(
+        derive_line_sets(*this, mesh, tbb::this_task_arena::max_concurrency()));
 }
 
 void BoxStore::check_against(const Options& options, const PatchMesh& mesh, const fs::path& manifest_path) {

@@ -21,6 +21,8 @@ namespace mpath {
 
 inline constexpr uint32_t kNoTarget = 0xFFFFFFFFu;
 
+struct LineSets;
+
 struct StoreBox {
   // Faces of the box's own patches: local patch k has local faces
   // local_faces[k] = {front, back or -1}; face_global maps them to the mesh.
@@ -56,6 +58,9 @@ class BoxStore {
   BoxStore(const Options& options, const PatchMesh& mesh);
 
   const linestore::Manifest& manifest() const { return manifest_; }
+  // The line-set data of a store of transparent boxes (hierarchy.transport =
+  // "lines"), derived from every line at opening; null otherwise.
+  const LineSets* line_sets() const { return line_sets_.get(); }
   const Hierarchy& hierarchy() const { return hierarchy_; }
   const StoreBox& box(int b) const { return boxes_[b]; }
   size_t box_count() const { return boxes_.size(); }
@@ -87,6 +92,7 @@ class BoxStore {
   std::vector<std::filesystem::path> files_;
   using Readers = std::vector<std::unique_ptr<linestore::BoxFileReader>>;
   mutable tbb::enumerable_thread_specific<Readers> readers_;
+  std::shared_ptr<const LineSets> line_sets_;
   size_t ar_total_ = 0;
 };
 

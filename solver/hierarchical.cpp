@@ -9,6 +9,7 @@
 
 #include "error.h"
 #include "first_shot.h"
+#include "line_sets.h"
 #include "progress.h"
 #include "sampling.h"
 
@@ -25,15 +26,11 @@ constexpr unsigned kLineOrderPurpose = 8;  // + box: the order of a pass through
 void add_ar_state(const BoxStore& store, RadiosityState& state) {
   state.ar_in.assign(store.ar_total() * state.channels, 0.0);
   state.ar_out.assign(store.ar_total() * state.channels, 0.0);
+  state.pooled.assign(store.line_sets() ? store.line_sets()->slots() * state.channels : 0, 0.0);
 }
 
 namespace {
 
-// Of a chunk, the lines a pass takes (the first, in stride order).
-struct ChunkPart {
-  uint64_t chunk;
-  uint64_t lines;
-};
 
 // An AR's power to send in a pass: its quota and the share of it one line carries.
 struct ArInput {
@@ -83,30 +80,6 @@ void move_held(std::vector<double>& held, size_t base, const std::vector<uint32_
       h = 0;
     }
   }
-}
-
-// The lines a pass over `fraction` of a box's lines takes: a run of whole
-// chunks (each holds lines spread over the whole box) from a place that
-// moves from pass to pass, and the first lines, in stride order, of the
-// last. Every line when `fraction` is 1.
-std::vector<ChunkPart> pass_parts(const BoxStore& store, int b, double fraction, unsigned pass) {
-  const StoreBox& box = store.box(b);
-  const uint64_t chunks = box.chunks.size();
-  std::vector<ChunkPart> out;
-  if (chunks == 0) return out;
-  if (fraction >= 1.0) {
-    for (uint64_t c = 0; c < chunks; ++c) out.push_back({c, box.chunk_lines[c]});
-    return out;
-  }
-  uint64_t need = std::max<uint64_t>(1, static_cast<uint64_t>(std::ceil(fraction * static_cast<double>(box.lines))));
-  const uint64_t first = static_cast<uint64_t>(std::fmod(pass * 0.6180339887498949, 1.0) * static_cast<double>(chunks));
-  for (uint64_t i = 0; i < chunks && need > 0; ++i) {
-    const uint64_t c = (first + i) % chunks;
-    const uint64_t take = std::min(need, box.chunk_lines[c]);
-    out.push_back({c, take});
-    need -= take;
-  }
-  return out;
 }
 
 BoxInputs start_box(const BoxStore& store, int b, RadiosityState& state, double power_per_line, unsigned pass) {
@@ -401,6 +374,30 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
 
 }  // namespace
 
+// The lines a pass over `fraction` of a box's lines takes: a run of whole
+// chunks (each holds lines spread over the whole box) from a place that
+// moves from pass to pass, and the first lines, in stride order, of the
+// last. Every line when `fraction` is 1.
+std::vector<ChunkPart> pass_parts(const BoxStore& store, int b, double fraction, unsigned pass) {
+  const StoreBox& box = store.box(b);
+  const uint64_t chunks = box.chunks.size();
+  std::vector<ChunkPart> out;
+  if (chunks == 0) return out;
+  if (fraction >= 1.0) {
+    for (uint64_t c = 0; c < chunks; ++c) out.push_back({c, box.chunk_lines[c]});
+    return out;
+  }
+  uint64_t need = std::max<uint64_t>(1, static_cast<uint64_t>(std::ceil(fraction * static_cast<double>(box.lines))));
+  const uint64_t first = static_cast<uint64_t>(std::fmod(pass * 0.6180339887498949, 1.0) * static_cast<double>(chunks));
+  for (uint64_t i = 0; i < chunks && need > 0; ++i) {
+    const uint64_t c = (first + i) % chunks;
+    const uint64_t take = std::min(need, box.chunk_lines[c]);
+    out.push_back({c, take});
+    need -= take;
+  }
+  return out;
+}
+
 Remaining remaining_power(const BoxStore& store, const RadiosityState& state) {
   Remaining r;
   const int ch = state.channels;
@@ -445,6 +442,12 @@ uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxS
       if (any) faces.push_back(g);
     }
   }
+  return shoot_unshot(mesh, tracer, faces, state, pass, seed, threads);
+}
+
+uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<int> faces, RadiosityState& state,
+                      unsigned pass, unsigned long long seed, int threads) {
+  const int ch = state.channels;
   if (faces.empty()) return 0;
   std::sort(faces.begin(), faces.end());
   const int shards = std::max(1, std::min<int>(threads, static_cast<int>(faces.size())));
@@ -474,6 +477,8 @@ uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxS
 PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store,
                            RadiosityState& state, const IterationLog& log, unsigned pass, int threads,
                            std::vector<BoxPassStats>* per_box, uint64_t* uncarried) {
+  if (const LineSets* sets = store.line_sets())
+    return line_set_iteration(mesh, tracer, store, *sets, state, pass, threads, options.lines.seed, per_box, uncarried);
   PassStats p = hierarchical_iteration(store, state, pass, threads, line_power(options, store, log),
                                        options.solver.schedule == "v-cycle", per_box);
   const uint64_t shot = shoot_uncarried(mesh, tracer, store, state, pass, options.lines.seed, threads);

@@ -52,6 +52,9 @@ Remaining remaining_power(const BoxStore& store, const RadiosityState& state);
 inline constexpr int kUncarriedLines = 16;
 uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, RadiosityState& state,
                          unsigned pass, unsigned long long seed, int threads);
+// The unshot power of `faces` shot with kUncarriedLines local lines each.
+uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<int> faces, RadiosityState& state,
+                      unsigned pass, unsigned long long seed, int threads);
 
 // One iteration of mpath-solve's stored-line methods with the options'
 // schedule and line power: hierarchical_iteration, then shoot_uncarried
@@ -66,6 +69,17 @@ PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const 
 // crossing it, and any order tied to the lines' geometry sends it along a
 // line like the one it came by (docs/algorithm.md, "Line order in a pass").
 void chunk_line_order(unsigned pass, int box, uint64_t chunk, size_t n, std::vector<uint32_t>& order);
+
+// Of a chunk, the lines a pass takes (the first of chunk_line_order).
+struct ChunkPart {
+  uint64_t chunk;
+  uint64_t lines;
+};
+
+// The lines a pass over `fraction` of box b's lines takes: a run of whole
+// chunks from a place that moves from pass to pass, and the first lines of
+// the last. Every line when `fraction` is 1.
+std::vector<ChunkPart> pass_parts(const BoxStore& store, int b, double fraction, unsigned pass);
 
 // One iteration: MP(root) and, depth by depth, MP of every box. Each box's
 // pass takes every line of the box (exact crossing counts) when

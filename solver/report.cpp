@@ -38,10 +38,7 @@ json hierarchy_json(const BoxStore& store, const RadiosityState& state, const st
 
 json energy_json(const RadiosityState& s) {
   const auto absorbed = s.rgb(s.energy.absorbed), escaped = s.rgb(s.energy.escaped), emitted = s.rgb(s.energy.emitted);
-  std::array<double, 3> unshot{};
-  for (size_t f = 0; f < s.faces; ++f)
-    for (int c = 0; c < s.channels; ++c) unshot[c] += s.unshot[s.at(f, c)];
-  const auto unshot_rgb = s.rgb(unshot);
+  const auto unshot_rgb = s.rgb(s.unshot_per_channel());
   std::array<double, 3> held{};
   for (size_t i = 0; i < s.ar_in.size(); ++i) held[i % s.channels] += s.ar_in[i] + s.ar_out[i];
   const auto held_rgb = s.rgb(held);

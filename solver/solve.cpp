@@ -52,7 +52,7 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
   if (store) crossings = store->face_crossings(mesh.face_count());
   else crossings = forecast_crossings(mesh, static_cast<double>(options.lines.total));
   std::unique_ptr<SubsceneNearest> accelerated;
-  if (options.first_shot.accelerate && store && store->box_count() > 1)
+  if (options.first_shot.accelerate && store && store->box_count() > 1 && !store->line_sets())
     accelerated = std::make_unique<SubsceneNearest>(mesh, *store);
   record.shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, record.threads,
                            emitter_crossings(options, std::move(crossings)), accelerated.get());

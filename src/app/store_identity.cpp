@@ -34,6 +34,7 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
       {"hierarchy.vp_grid", std::to_string(o.hierarchy.vp_grid)},
       {"hierarchy.max_depth", std::to_string(o.hierarchy.max_depth)},
       {"hierarchy.max_share", fmt::format("{}", o.hierarchy.max_share)},
+      {"hierarchy.transport", o.solver.method == SolverMethod::hierarchical ? o.hierarchy.transport : "none"},
       {"lines.seed", std::to_string(o.lines.seed)},
       {"lines.sequence", o.lines.sequence},
       {"store.chunk_lines", std::to_string(o.store.chunk_lines)},
@@ -42,7 +43,8 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
 
 Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh) {
   Hierarchy h = build_hierarchy(mesh, options.hierarchy, options.solver.method != SolverMethod::hierarchical);
-  if (options.hierarchy.vp_grid <= 0) fit_vp_grids(h, options.lines);
+  if (h.boxes.size() > 1 && options.hierarchy.transport == "lines") make_boxes_transparent(h);
+  else if (options.hierarchy.vp_grid <= 0) fit_vp_grids(h, options.lines);
   return h;
 }
 

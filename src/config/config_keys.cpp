@@ -208,6 +208,12 @@ std::vector<ConfigKey> make_table() {
        SET(o.hierarchy.max_share = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.hierarchy.max_share)},
       {"hierarchy.max_depth", "deepest subscene level; 0: no subscenes (algorithm.md: one level measured best)",
        SET(o.hierarchy.max_depth = static_cast<int>(in_range(get_integer(n, s), 0, 64, s))), GET(o.hierarchy.max_depth)},
+      {"hierarchy.transport",
+       "`\"transmittance\"` (the paper's: virtual walls with angular regions and transmittances) or `\"lines\"` (a "
+       "box's lines see everything inside it; each pair of patches is carried by the smallest box holding both; no "
+       "power held in walls); see algorithm.md",
+       SET(o.hierarchy.transport = get_choice(n, s, "transport", {"transmittance", "lines"})),
+       GET(o.hierarchy.transport)},
       {"lines.total",
        "stored lines in all boxes (hierarchical, multipath), or global lines of the first pass (classic; later passes use fewer)",
        SET(o.lines.total = positive(get_integer(n, s), s)), GET(static_cast<int64_t>(o.lines.total))},

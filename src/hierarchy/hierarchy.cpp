@@ -426,6 +426,21 @@ Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options
   return builder.finish();
 }
 
+void make_boxes_transparent(Hierarchy& h) {
+  h.transparent = true;
+  // Children come after parents: add each box's patches to its ancestors', deepest first.
+  std::vector<std::vector<uint32_t>> own(h.boxes.size());
+  for (size_t b = 0; b < h.boxes.size(); ++b) own[b] = h.boxes[b].patches;
+  for (size_t b = h.boxes.size(); b-- > 1;)
+    for (int a = h.boxes[b].parent; a >= 0; a = h.boxes[a].parent)
+      h.boxes[a].patches.insert(h.boxes[a].patches.end(), own[b].begin(), own[b].end());
+  for (SceneBox& box : h.boxes) {
+    std::sort(box.patches.begin(), box.patches.end());
+    box.grid.fill(0);
+    box.set_ar_offsets();
+  }
+}
+
 std::string describe_hierarchy(const Hierarchy& h, const std::vector<uint64_t>& lines) {
   std::string out = fmt::format("{} box(es), depth {}, {} ARs in subscene walls\n", h.boxes.size(), h.max_depth(), h.ar_total());
   std::vector<std::pair<int, int>> stack = {{0, 0}};
@@ -434,10 +449,11 @@ std::string describe_hierarchy(const Hierarchy& h, const std::vector<uint64_t>& 
     stack.pop_back();
     const SceneBox& box = h.boxes[b];
     const Vec3 s = box.bounds.size();
-    out += fmt::format("{:{}}box {}{}: depth {}, {} object(s) ({} direct), {} polygon(s), {} patch(es) direct, "
+    out += fmt::format("{:{}}box {}{}: depth {}, {} object(s) ({} direct), {} polygon(s), {} patch(es) {}, "
                        "{} child box(es), size {:.4g} x {:.4g} x {:.4g}",
                        "", 2 * indent, b, b == 0 ? " (root)" : "", box.depth, box.objects_total, box.objects.size(),
-                       box.polygons_total, box.patches.size(), box.children.size(), s.x, s.y, s.z);
+                       box.polygons_total, box.patches.size(), h.transparent ? "seen by its lines" : "direct",
+                       box.children.size(), s.x, s.y, s.z);
     if (b > 0)
       out += fmt::format(", quotient {:.3f}, VP grids {}x{}, {}x{}, {}x{} (x, y, z faces), {} ARs", box.quotient, box.grid[0],
                          box.grid[0], box.grid[2], box.grid[2], box.grid[4], box.grid[4], box.ar_count());

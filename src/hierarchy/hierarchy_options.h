@@ -13,6 +13,12 @@ struct HierarchyOptions {
   // Largest subscene box, as a share of the scene box's surface area.
   double max_share = 0.5;
   int max_depth = 1;  // docs/algorithm.md: one level measured best
+  // How power crosses between boxes (docs/algorithm.md): "transmittance" (the
+  // paper's: lines of a box stop at its children's walls, whose virtual
+  // patches and angular regions hold power with a transmittance per AR) or
+  // "lines" (a box's lines see every patch inside it, children included; each
+  // pair of patches is carried by the lines of the smallest box holding both).
+  std::string transport = "transmittance";
 };
 
 struct LineOptions {

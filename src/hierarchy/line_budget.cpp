@@ -21,13 +21,16 @@ std::vector<double> wanted_lines(const Hierarchy& h, const LineOptions& lines) {
   // density (lines per unit of box surface): with many subscenes the rest
   // spread thin left them with fewer lines per area than the root. When the
   // floors ask for more lines than there are, every box is scaled down alike.
+  // Transparent boxes need no floor: the root's lines carry their pairs too,
+  // a subscene's lines only add to them (docs/algorithm.md).
+  const double floor = h.transparent ? 0.0 : lines.min_density;
   const double root_density = root / line_box(h.boxes[0].bounds).surface_area();
   std::vector<double> want(h.boxes.size(), 0.0);
   want[0] = root;
   double sum = root;
   for (size_t b = 1; b < h.boxes.size(); ++b) {
     const double share = weights > 0 ? (total - root) * weight(h.boxes[b]) / weights : 0.0;
-    want[b] = std::max(share, lines.min_density * root_density * line_box(h.boxes[b].bounds).surface_area());
+    want[b] = std::max(share, floor * root_density * line_box(h.boxes[b].bounds).surface_area());
     sum += want[b];
   }
   const double scale = sum > total ? total / sum : 1.0;

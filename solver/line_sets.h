@@ -1,0 +1,62 @@
+// The line-set transport of the hierarchy (hierarchy.transport = "lines";
+// docs/algorithm.md, "Line-set transport"). Every box's lines see every
+// patch inside the box. The exchange between two patches f and g belongs to
+// the smallest box holding both (their class; the root's for f and the
+// outside), and is carried by the lines of that box and of every box above
+// it, all of which meet the pair: a line's crossing carries 1/M of the
+// face's power of that class, M the crossings of the face in that class by
+// all those lines (the densities of the line sets add up, as in multiple
+// importance sampling with the balance heuristic). Each face's power is split
+// among its classes in proportion to the share of its form factor in each,
+// estimated from each box's own lines. No power is held in walls and nothing
+// is approximated by transmittances: in a furnace the answer is exact up to
+// the noise of the lines.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "box_store.h"
+#include "hierarchical.h"
+#include "radiosity_state.h"
+#include "tracer.h"
+
+namespace mpath {
+
+// What the line-set passes need of each box, derived once from the store.
+struct LineSetBox {
+  std::vector<int> owner;         // per local patch: the box holding it
+  std::vector<uint32_t> entry;    // per local face: its first entry (its own box's class); entry[faces]: entries
+  std::vector<uint32_t> slot;     // per entry: its slot in LineSets (face and class)
+};
+
+struct LineSets {
+  std::vector<LineSetBox> boxes;
+  std::vector<int> depth, parent;   // per box
+  std::vector<uint32_t> face_slot;  // per mesh face: first slot (its own box's class), then up to the root
+  std::vector<double> alpha;        // per slot: the share of the face's power in that class
+  std::vector<double> carriers;     // per slot: the crossings of every line set that carry the class at the face
+  std::vector<int> uncarried;       // faces no line can carry: shot with local lines
+  size_t slots() const { return face_slot.back(); }
+  // The smallest box holding boxes a and b.
+  int common_box(int a, int b) const {
+    while (a != b) {
+      if (depth[a] >= depth[b]) a = parent[a];
+      else b = parent[b];
+    }
+    return a;
+  }
+};
+
+// Reads every line of the store once (in parallel) to count, per box and
+// face, the crossings and the pairs the box carries.
+LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh, int threads);
+
+// One iteration: every box's pass over all its lines, deepest first, then
+// the root (a class's first carrier is its own box); then the uncarried
+// faces' power shot with local lines.
+PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, const LineSets& sets,
+                             RadiosityState& state, unsigned pass, int threads, unsigned long long seed,
+                             std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines);
+
+}  // namespace mpath
