@@ -41,7 +41,6 @@ void check_chunk(const StoreBox& box, const linestore::DecodedChunk& chunk, int 
 // crossings of every carrier of the slot's class.
 struct SlotCounts {
   std::vector<double> crossings;  // by the slot's box: crossings of the face in the direction it faces
-  std::vector<double> inside;     // ...whose next crossing is inside the box (for the root: anywhere)
   std::vector<double> carriers;   // by any box: crossings that carry the slot's class
 };
 
@@ -54,7 +53,7 @@ void count_box(const BoxStore& store, const LineSets& sets, int x, int threads, 
   std::vector<SlotCounts> part(shards);
   tbb::parallel_for(0, shards, [&](int s) {
     SlotCounts& p = part[s];
-    for (auto* v : {&p.crossings, &p.inside, &p.carriers}) v->assign(slots, 0.0);
+    for (auto* v : {&p.crossings, &p.carriers}) v->assign(slots, 0.0);
     linestore::DecodedChunk chunk;
     for (uint64_t c = chunks * s / shards; c < chunks * (s + 1) / shards; ++c) {
       store.read(x, c, chunk);
@@ -70,7 +69,6 @@ void count_box(const BoxStore& store, const LineSets& sets, int x, int threads, 
             const int k = pair_class(sets, lines, x == 0, ev, n, i, i + dir);
             p.crossings[own] += 1;
             if (k < 0) continue;
-            p.inside[own] += 1;
             p.carriers[sets.face_slot[box.face_global[face]] + k] += 1;
           }
       }
@@ -79,37 +77,24 @@ void count_box(const BoxStore& store, const LineSets& sets, int x, int threads, 
   for (const SlotCounts& p : part)
     for (size_t i = 0; i < slots; ++i) {
       counts.crossings[i] += p.crossings[i];
-      counts.inside[i] += p.inside[i];
       counts.carriers[i] += p.carriers[i];
     }
 }
 
 // The shares of a face's power among its classes (its own box first, the
-// root last): class k holds the pairs whose other end is inside box k but
-// not inside box k-1, and the share inside box k is what box k's own lines
-// see inside it. A share no line carries goes to the nearest class that has
-// carriers. False when no class has any.
+// root last). A line of box Y at the face meets next a patch of class k (one
+// not above Y) with probability alpha_k, so the carriers' crossings of class
+// k over all crossings of the face by the carriers' lines estimate alpha_k
+// from every line that can see it. False when no line carries any class.
 bool face_shares(const SlotCounts& counts, uint32_t first, uint32_t end, double* alpha) {
-  double below = 0;
-  for (uint32_t s = first; s < end; ++s) {
-    double within = 1.0;  // the root holds everything, the outside included
-    if (s + 1 < end) within = counts.crossings[s] > 0 ? counts.inside[s] / counts.crossings[s] : below;
-    within = std::max(within, below);
-    alpha[s - first] = within - below;
-    below = within;
+  double sum = 0, seen = 0;
+  for (uint32_t s = end; s-- > first;) {
+    seen += counts.crossings[s];  // the crossings of every box from this class's up to the root
+    alpha[s - first] = seen > 0 ? counts.carriers[s] / seen : 0.0;
+    sum += alpha[s - first];
   }
-  const uint32_t n = end - first;
-  for (uint32_t k = 0; k < n; ++k) {
-    if (alpha[k] <= 0 || counts.carriers[first + k] > 0) continue;
-    int to = -1;
-    for (uint32_t d = 1; d < n && to < 0; ++d) {
-      if (k >= d && counts.carriers[first + k - d] > 0) to = static_cast<int>(k - d);
-      else if (k + d < n && counts.carriers[first + k + d] > 0) to = static_cast<int>(k + d);
-    }
-    if (to < 0) return false;
-    alpha[to] += alpha[k];
-    alpha[k] = 0;
-  }
+  if (!(sum > 0)) return false;
+  for (uint32_t s = first; s < end; ++s) alpha[s - first] /= sum;
   return true;
 }
 
@@ -146,7 +131,7 @@ LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh, int thre
     }
   }
   SlotCounts counts;
-  for (auto* v : {&counts.crossings, &counts.inside, &counts.carriers}) v->assign(sets.slots(), 0.0);
+  for (auto* v : {&counts.crossings, &counts.carriers}) v->assign(sets.slots(), 0.0);
   for (size_t x = 0; x < store.box_count(); ++x) count_box(store, sets, static_cast<int>(x), threads, counts);
   sets.alpha.assign(sets.slots(), 0.0);
   for (size_t f = 0; f < faces; ++f)

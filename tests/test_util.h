@@ -80,6 +80,7 @@ struct StoredSolve {
   RadiosityState state;
   IterationLog log;
   size_t boxes = 0;
+  int depth = 0;  // of the hierarchy
 };
 StoredSolve solve_stored(const Options& options,
                          const std::function<void(const RadiosityState&)>& after_each = {});

@@ -111,6 +111,10 @@ Options load_options(const fs::path& config_path, const std::vector<std::string>
   options.output.dir = file.parent_path() / options.output.dir;
   apply_table(root, "", file, cli_keys, options);
   if (options.scene.file.empty()) throw InputError(fmt::format("{}: config key 'scene.file' is required", file.string()));
+  if (options.first_shot.accelerate && options.hierarchy.transport == "lines")
+    throw InputError(fmt::format("{}: config key 'first_shot.accelerate' needs the associated patches of "
+                                 "hierarchy.transport = \"transmittance\" (the \"lines\" transport has none)",
+                                 file.string()));
   return options;
 }
 

@@ -18,12 +18,12 @@ struct HierarchyOptions {
   // patches and angular regions hold power with a transmittance per AR) or
   // "lines" (a box's lines see every patch inside it, children included; each
   // pair of patches is carried by the lines of the smallest box holding both).
-  std::string transport = "transmittance";
+  std::string transport = "lines";  // docs/algorithm.md: unbiased where "transmittance" is not
 };
 
 struct LineOptions {
   long long total = 1'000'000;
-  double root_fraction = 2.0 / 3.0;
+  double root_fraction = 0.8;  // docs/algorithm.md (the paper: 2/3)
   // How the subscenes share the rest: "quotient" (their grouping quotient)
   // or "objects" (their object count), paper 3.3.1.
   std::string box_budget = "quotient";
