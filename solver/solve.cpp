@@ -81,9 +81,10 @@ void run_iterations(const Options& options, const PatchMesh& mesh, const Tracer&
   record.timings.iterations = seconds_since(start);
 }
 
-// The energy balance and what is left to distribute, in the log.
+// The energy balance and what is left to distribute, in the log; a run
+// stopped by the iteration cap is a warning, in the report too.
 void log_remaining(const Options& options, const BoxStore* store, const RadiosityState& state,
-                   const IterationLog& log) {
+                   const IterationLog& log, std::vector<std::string>& warnings) {
   const double e = state.emitted_total();
   spdlog::info("energy: unshot {:.3e} and held in ARs {:.3e} of emitted, balance residual {:.2e} (relative)",
                state.unshot_total() / e, state.held_total() / e, state.energy_residual() / e);
@@ -94,9 +95,13 @@ void log_remaining(const Options& options, const BoxStore* store, const Radiosit
                  r.unshot / e, r.in / e, r.out / e, r.deepest_box, r.deepest_power / e,
                  (r.stuck_faces + r.stuck_in + r.stuck_out) / e, r.stuck_faces / e, (r.stuck_in + r.stuck_out) / e);
   }
-  if (!log.converged)
-    spdlog::warn("stopped at solver.iterations = {} with unshot + held {:.3e} of emitted above solver.tolerance {}",
-                 options.solver.iterations, state.remaining_fraction(), options.solver.tolerance);
+  if (!log.converged) {
+    warnings.push_back(fmt::format(
+        "not converged: stopped at solver.iterations = {} with {:.3e} of the emitted power still to distribute "
+        "(solver.tolerance = {}); run again with a larger solver.iterations and --resume to continue",
+        options.solver.iterations, state.remaining_fraction(), options.solver.tolerance));
+    spdlog::warn("{}", warnings.back());
+  }
 }
 
 // solution.ply and, per camera, the EXR and PNG images; their names in `record`.
@@ -158,7 +163,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, mesh, record.threads)};
   start_state(options, flags, mesh, tracer, store.get(), checkpoint, state, record);
   run_iterations(options, mesh, tracer, store.get(), checkpoint, state, record);
-  log_remaining(options, store.get(), state, record.iterations);
+  log_remaining(options, store.get(), state, record.iterations, record.warnings);
   write_outputs(options, mesh, tracer, state, record);
 
   record.timings.total = seconds_since(start);

@@ -58,6 +58,23 @@ TEST(Cli, SolvesTheDefaultSceneAndWritesEveryOutput) {
   EXPECT_NE(exr.find("exposure"), std::string::npos);
 }
 
+// A run stopped by the iteration cap says so in report.json, with what to do.
+TEST(Cli, AnUnconvergedRunWarnsInItsReport) {
+  TempDir dir;
+  const RunResult r = solve(kCornell + " -q lines.total=20000 first_shot.lines=10000 solver.method=classic "
+                            "solver.iterations=1 solver.tolerance=1e-9 output.exr=false output.png=false output.dir=" +
+                            dir.path().string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("not converged"), std::string::npos) << r.output;
+  const auto report = nlohmann::json::parse(test::read_file(dir / "report.json"));
+  EXPECT_FALSE(report["iterations"]["converged"].get<bool>());
+  bool warned = false;
+  for (const auto& w : report["warnings"])
+    warned |= w.get<std::string>().find("not converged: stopped at solver.iterations = 1") != std::string::npos &&
+              w.get<std::string>().find("--resume") != std::string::npos;
+  EXPECT_TRUE(warned) << report["warnings"].dump();
+}
+
 TEST(Cli, PrintsTheEffectiveConfigWithOverrides) {
   const RunResult r = solve(kCornell + " --print-config solver.iterations=3");
   ASSERT_EQ(r.exit_code, 0) << r.output;
