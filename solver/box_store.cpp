@@ -296,7 +296,8 @@ void BoxStore::derive_box_data(const PatchMesh& mesh, size_t b) {
     coverage = c[c.size() / 2] > 0 ? 16.0 / c[c.size() / 2] : 1.0;
   }
   if (box.lines > 0) coverage = std::max(coverage, 2.0 * sb.ar_count() / static_cast<double>(box.lines));
-  if (b > 0) coverage = std::max(coverage, kSubsceneCoverage);
+  // A subscene's walls hold power only its own lines move on; transparent boxes have none.
+  if (b > 0 && !hierarchy_.transparent) coverage = std::max(coverage, kSubsceneCoverage);
   box.coverage = std::min(1.0, coverage);
   if (b == 0) return;
   box.transmittance = transmittances(sb, box.counts.wall_lines, box.counts.wall_open);

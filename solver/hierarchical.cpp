@@ -478,7 +478,8 @@ PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const 
                            RadiosityState& state, const IterationLog& log, unsigned pass, int threads,
                            std::vector<BoxPassStats>* per_box, uint64_t* uncarried) {
   if (const LineSets* sets = store.line_sets())
-    return line_set_iteration(mesh, tracer, store, *sets, state, pass, threads, options.lines.seed, per_box, uncarried);
+    return line_set_iteration(mesh, tracer, store, *sets, state, pass, threads, line_power(options, store, log),
+                              options.lines.seed, per_box, uncarried);
   PassStats p = hierarchical_iteration(store, state, pass, threads, line_power(options, store, log),
                                        options.solver.schedule == "v-cycle", per_box);
   const uint64_t shot = shoot_uncarried(mesh, tracer, store, state, pass, options.lines.seed, threads);

@@ -42,11 +42,12 @@ void check_chunk(const StoreBox& box, const linestore::DecodedChunk& chunk, int 
 struct SlotCounts {
   std::vector<double> crossings;  // by the slot's box: crossings of the face in the direction it faces
   std::vector<double> carriers;   // by any box: crossings that carry the slot's class
+  std::vector<double> entries;    // by one box, per entry of the box: the same
 };
 
-void count_box(const BoxStore& store, const LineSets& sets, int x, int threads, SlotCounts& counts) {
+void count_box(const BoxStore& store, LineSets& sets, int x, int threads, SlotCounts& counts) {
   const StoreBox& box = store.box(x);
-  const LineSetBox& lines = sets.boxes[x];
+  LineSetBox& lines = sets.boxes[x];
   const uint64_t chunks = box.chunks.size();
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
   const size_t slots = sets.slots();
@@ -54,6 +55,7 @@ void count_box(const BoxStore& store, const LineSets& sets, int x, int threads, 
   tbb::parallel_for(0, shards, [&](int s) {
     SlotCounts& p = part[s];
     for (auto* v : {&p.crossings, &p.carriers}) v->assign(slots, 0.0);
+    p.entries.assign(lines.slot.size(), 0.0);
     linestore::DecodedChunk chunk;
     for (uint64_t c = chunks * s / shards; c < chunks * (s + 1) / shards; ++c) {
       store.read(x, c, chunk);
@@ -70,15 +72,19 @@ void count_box(const BoxStore& store, const LineSets& sets, int x, int threads, 
             p.crossings[own] += 1;
             if (k < 0) continue;
             p.carriers[sets.face_slot[box.face_global[face]] + k] += 1;
+            p.entries[lines.entry[face] + k] += 1;
           }
       }
     }
   });
-  for (const SlotCounts& p : part)
+  lines.carried.assign(lines.slot.size(), 0.0);
+  for (const SlotCounts& p : part) {
     for (size_t i = 0; i < slots; ++i) {
       counts.crossings[i] += p.crossings[i];
       counts.carriers[i] += p.carriers[i];
     }
+    for (size_t e = 0; e < p.entries.size(); ++e) lines.carried[e] += p.entries[e];
+  }
 }
 
 // The shares of a face's power among its classes (its own box first, the
@@ -149,14 +155,38 @@ namespace {
 struct Flight {
   std::vector<double> quota;  // slot * channels
   std::vector<double> used;   // per slot: fraction of the quota sent
+  std::vector<double> share;  // per slot: of the quota, what one carrying crossing sends
+  std::vector<double> fraction;             // per box: of its lines, the share this iteration takes
+  std::vector<std::vector<ChunkPart>> parts;  // per box: which
 };
 
-// A shard's private accumulators for one box's pass, per entry of the box.
+// What a pass reads of an entry (a face and one of the classes the box
+// carries there) and of a face, each in one record.
+struct EntryInput {
+  double quota[3] = {0, 0, 0};  // the class's power in flight
+  double share = 0;             // of it, what one carrying crossing sends
+  double expected = 0;          // a part of the lines: the share of the quota the pass may send in all
+  double alpha = 0;             // the class's share of what the face receives
+};
+struct FaceIn {
+  double rho[3] = {0, 0, 0};
+  uint32_t entry = 0, carried = 0;  // its entries, and how many
+  bool later = false;               // it has classes above the box
+};
+
+// A shard's private accumulators for one box's pass.
+struct alignas(32) EntryAcc {
+  double gathered[3] = {0, 0, 0};  // received, sent on along the next crossing of its class
+  double used = 0;                 // fraction of the quota sent
+};
+struct FaceAcc {
+  double phi_gain[3] = {0, 0, 0};
+  double later[3] = {0, 0, 0};  // received, for the classes of boxes above this one
+};
 struct alignas(128) SetShard {
-  std::vector<double> gathered;   // entry * channels: received, sent on along the next crossing of its class
-  std::vector<double> used;       // per entry
-  std::vector<double> phi_gain;   // local face * channels
-  std::vector<double> later;      // local face * channels: received, for the classes of boxes above this one
+  std::vector<EntryAcc> entries;
+  std::vector<FaceAcc> faces;
+  double allowance = 1;  // of each entry's expected part, the shard's (a part of the lines)
   std::array<double, 3> absorbed{}, escaped{};
   uint64_t lines = 0, hits = 0;
   struct Send {
@@ -170,9 +200,10 @@ struct PassContext {
   const StoreBox* box;
   const LineSetBox* lines;
   const LineSets* sets;
-  const RadiosityState* state;
-  const Flight* flight;
+  std::vector<EntryInput> entries;
+  std::vector<FaceIn> faces;
   bool root;
+  bool capped;  // a part of the lines: no shard sends more than its part of an entry's expected share
 };
 
 template <int CH>
@@ -192,21 +223,21 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       if (face < 0) continue;
       const int k = pair_class(sets, lines, in.root, ev, n, i, i + dir);
       if (k < 0) continue;
-      const uint32_t e = lines.entry[face] + static_cast<uint32_t>(k);
-      const uint32_t slot = lines.slot[e];
-      const double share = sets.carriers[slot] > 0 ? 1.0 / sets.carriers[slot] : 0.0;
-      shard.used[e] += share;
+      const uint32_t e = in.faces[face].entry + static_cast<uint32_t>(k);
+      const EntryInput& input = in.entries[e];
+      EntryAcc& acc = shard.entries[e];
+      double share = input.share;
+      if (in.capped) share = std::max(0.0, std::min(share, input.expected * shard.allowance - acc.used));
+      acc.used += share;
       SetShard::Send s{i, dir, {0, 0, 0}};
       bool any = false;
       for (int c = 0; c < ch; ++c) {
-        double& g = shard.gathered[size_t{e} * ch + c];
-        s.power[c] = in.flight->quota[size_t{slot} * ch + c] * share + g;
-        g = 0;
+        s.power[c] = input.quota[c] * share + acc.gathered[c];
+        acc.gathered[c] = 0;
         any |= s.power[c] != 0;
       }
       if (any) sends.push_back(s);
     }
-  const RadiosityState& state = *in.state;
   for (const SetShard::Send& s : sends) {
     const int j = s.from + s.dir;
     if (j < 0 || j >= n) {  // off the line: only the root sends there, out of the scene
@@ -220,21 +251,23 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
     }
     // rho of it stays, shared by the face's classes: those this box carries
     // are sent on in this pass, the rest waits for the boxes above.
-    const size_t g = static_cast<size_t>(box.face_global[face]);
-    const uint32_t first = lines.entry[face], carried = lines.entry[face + 1] - first;
-    const uint32_t slot0 = sets.face_slot[g], classes = sets.face_slot[g + 1] - slot0;
+    const FaceIn& f = in.faces[face];
+    FaceAcc& fa = shard.faces[face];
+    double kept[3];
     for (int c = 0; c < ch; ++c) {
-      const double kept = state.rho[state.at(g, c)] * s.power[c];
-      shard.phi_gain[size_t(face) * ch + c] += kept;
-      shard.absorbed[c] += s.power[c] - kept;
-      double sent_on = 0;
-      for (uint32_t k = 0; k < carried; ++k) {
-        const double part = kept * sets.alpha[slot0 + k];
-        shard.gathered[size_t{first + k} * ch + c] += part;
-        sent_on += part;
-      }
-      if (carried < classes) shard.later[size_t(face) * ch + c] += kept - sent_on;
+      kept[c] = f.rho[c] * s.power[c];
+      fa.phi_gain[c] += kept[c];
+      shard.absorbed[c] += s.power[c] - kept[c];
     }
+    double sent_on = 0;
+    for (uint32_t k = 0; k < f.carried; ++k) {
+      const double a = in.entries[f.entry + k].alpha;
+      EntryAcc& acc = shard.entries[f.entry + k];
+      for (int c = 0; c < ch; ++c) acc.gathered[c] += kept[c] * a;
+      sent_on += a;
+    }
+    if (f.later)
+      for (int c = 0; c < ch; ++c) fa.later[c] += kept[c] * (1.0 - sent_on);
   }
 }
 
@@ -281,29 +314,55 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     }
     flight.used[slot] = 0;
   }
-  const PassContext in{&box, &lines, &sets, &state, &flight, x == 0};
-  const uint64_t chunks = box.chunks.size();
+  const std::vector<ChunkPart>& parts = flight.parts[x];
+  const bool every_line = flight.fraction[x] >= 1.0;
+  PassContext in{&box, &lines, &sets, {}, {}, x == 0, !every_line};
+  const size_t faces = box.face_global.size();
+  in.entries.resize(entries);
+  for (uint32_t e = 0; e < entries; ++e) {
+    EntryInput& input = in.entries[e];
+    const uint32_t slot = lines.slot[e];
+    for (int c = 0; c < ch; ++c) input.quota[c] = flight.quota[size_t{slot} * ch + c];
+    input.share = flight.share[slot];
+    input.expected = flight.fraction[x] * lines.carried[e] * flight.share[slot];
+    input.alpha = sets.alpha[slot];
+  }
+  in.faces.resize(faces);
+  for (size_t f = 0; f < faces; ++f) {
+    const size_t g = static_cast<size_t>(box.face_global[f]);
+    FaceIn& face = in.faces[f];
+    for (int c = 0; c < ch; ++c) face.rho[c] = state.rho[state.at(g, c)];
+    face.entry = lines.entry[f];
+    face.carried = lines.entry[f + 1] - lines.entry[f];
+    face.later = face.carried < sets.face_slot[g + 1] - sets.face_slot[g];
+  }
+  const uint64_t chunks = parts.size();
+  uint64_t pass_lines = 0;
+  for (const ChunkPart& p : parts) pass_lines += p.lines;
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
   std::vector<SetShard> acc(shards);
-  const size_t faces = box.face_global.size();
   tbb::parallel_for(0, shards, [&](int s) {
     SetShard& a = acc[s];
-    a.gathered.assign(size_t{entries} * ch, 0.0);
-    a.used.assign(entries, 0.0);
-    a.phi_gain.assign(faces * ch, 0.0);
-    a.later.assign(faces * ch, 0.0);
+    a.entries.assign(entries, EntryAcc{});
+    a.faces.assign(faces, FaceAcc{});
+    uint64_t shard_lines = 0;
+    for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) shard_lines += parts[i].lines;
+    a.allowance = pass_lines ? double(shard_lines) / double(pass_lines) : 0.0;
     linestore::DecodedChunk chunk;
     std::vector<uint32_t> order;
-    for (uint64_t c = chunks * s / shards; c < chunks * (s + 1) / shards; ++c) {
+    for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) {
+      const uint64_t c = parts[i].chunk;
       store.read(x, c, chunk);
       check_chunk(box, chunk, x, c);
+      const size_t take = std::min<size_t>(chunk.lines(), parts[i].lines);
       chunk_line_order(pass, x, c, chunk.lines(), order);
-      for (const uint32_t l : order) {
+      for (size_t k = 0; k < take; ++k) {
+        const uint32_t l = order[k];
         const Event* ev = chunk.events.data() + chunk.first[l];
         const int m = static_cast<int>(chunk.first[l + 1] - chunk.first[l]);
         (ch == 1 ? transport_set_line<1> : transport_set_line<3>)(in, ev, m, a);
       }
-      progress.advance(chunk.lines());
+      progress.advance(take);
     }
   });
   // Merge in shard order: the quota sent, what each class gathered and did
@@ -311,21 +370,21 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   SetResult result;
   for (size_t f = 0; f < faces; ++f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
-    const uint32_t carried = lines.entry[f + 1] - lines.entry[f];
-    for (uint32_t k = 0; k < carried; ++k) {
-      const uint32_t e = lines.entry[f] + k, slot = lines.slot[e];
+    const FaceIn& face = in.faces[f];
+    for (uint32_t k = 0; k < face.carried; ++k) {
+      const uint32_t e = face.entry + k, slot = lines.slot[e];
       for (const SetShard& a : acc) {
-        flight.used[slot] += a.used[e];
-        for (int c = 0; c < ch; ++c) state.pooled[size_t{slot} * ch + c] += a.gathered[size_t{e} * ch + c];
+        flight.used[slot] += a.entries[e].used;
+        for (int c = 0; c < ch; ++c) state.pooled[size_t{slot} * ch + c] += a.entries[e].gathered[c];
       }
     }
     for (int c = 0; c < ch; ++c) {
       double later = 0;
       for (const SetShard& a : acc) {
-        state.phi[state.at(g, c)] += a.phi_gain[f * ch + c];
-        later += a.later[f * ch + c];
+        state.phi[state.at(g, c)] += a.faces[f].phi_gain[c];
+        later += a.faces[f].later[c];
       }
-      if (later != 0) pool_classes(sets, g, carried, ch, c, later, state.pooled);
+      if (later != 0) pool_classes(sets, g, face.carried, ch, c, later, state.pooled);
     }
   }
   for (const SetShard& a : acc) {
@@ -359,9 +418,38 @@ void assign_unshot(const LineSets& sets, RadiosityState& state) {
 
 }  // namespace
 
+// Which lines each box takes this iteration, and what one carrying crossing
+// of a class sends: 1 / (the carriers' crossings this iteration takes).
+void plan_iteration(const BoxStore& store, const LineSets& sets, const RadiosityState& state, double power_per_line,
+                    unsigned pass, Flight& flight) {
+  const size_t boxes = store.box_count();
+  flight.fraction.assign(boxes, 1.0);
+  flight.parts.assign(boxes, {});
+  double power = 0;
+  for (double p : state.pooled) power += p;
+  for (size_t x = 0; x < boxes; ++x) {
+    const StoreBox& box = store.box(static_cast<int>(x));
+    if (power_per_line > 0 && box.lines > 0)
+      flight.fraction[x] = std::clamp(power / (power_per_line * static_cast<double>(store.lines())), box.coverage, 1.0);
+    flight.parts[x] = pass_parts(store, static_cast<int>(x), flight.fraction[x], pass);
+    if (flight.fraction[x] < 1.0 && box.lines > 0) {
+      uint64_t lines = 0;
+      for (const ChunkPart& p : flight.parts[x]) lines += p.lines;
+      flight.fraction[x] = static_cast<double>(lines) / static_cast<double>(box.lines);
+    }
+  }
+  std::vector<double> taken(sets.slots(), 0.0);
+  for (size_t x = 0; x < boxes; ++x) {
+    const LineSetBox& lines = sets.boxes[x];
+    for (size_t e = 0; e < lines.slot.size(); ++e) taken[lines.slot[e]] += flight.fraction[x] * lines.carried[e];
+  }
+  flight.share.assign(sets.slots(), 0.0);
+  for (size_t s = 0; s < sets.slots(); ++s) flight.share[s] = taken[s] > 0 ? 1.0 / taken[s] : 0.0;
+}
+
 PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, const LineSets& sets,
-                             RadiosityState& state, unsigned pass, int threads, unsigned long long seed,
-                             std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines) {
+                             RadiosityState& state, unsigned pass, int threads, double power_per_line,
+                             unsigned long long seed, std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines) {
   const auto start = std::chrono::steady_clock::now();
   const Hierarchy& h = store.hierarchy();
   const int ch = state.channels;
@@ -369,6 +457,7 @@ PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const 
   Flight flight;
   flight.quota.assign(sets.slots() * ch, 0.0);
   flight.used.assign(sets.slots(), 0.0);
+  plan_iteration(store, sets, state, power_per_line, pass, flight);
   // Deepest boxes first, the root last. Boxes of one depth hold disjoint
   // faces and run in parallel.
   std::vector<std::vector<int>> at_depth(h.max_depth() + 1);

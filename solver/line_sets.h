@@ -28,6 +28,7 @@ struct LineSetBox {
   std::vector<int> owner;         // per local patch: the box holding it
   std::vector<uint32_t> entry;    // per local face: its first entry (its own box's class); entry[faces]: entries
   std::vector<uint32_t> slot;     // per entry: its slot in LineSets (face and class)
+  std::vector<double> carried;    // per entry: this box's crossings that carry the entry's class at its face
 };
 
 struct LineSets {
@@ -52,11 +53,15 @@ struct LineSets {
 // face, the crossings and the pairs the box carries.
 LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh, int threads);
 
-// One iteration: every box's pass over all its lines, deepest first, then
-// the root (a class's first carrier is its own box); then the uncarried
-// faces' power shot with local lines.
+// One iteration: every box's pass, deepest first, then the root (a class's
+// first carrier is its own box); then the uncarried faces' power shot with
+// local lines. Every line of every box when `power_per_line` is 0;
+// otherwise each box takes as many as carry about that power each (the power
+// left over the store's lines, at least the box's coverage), a crossing's
+// share of its class scaled so that the carriers' expected shares add up to
+// one, none sending more than its expected part.
 PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, const LineSets& sets,
-                             RadiosityState& state, unsigned pass, int threads, unsigned long long seed,
-                             std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines);
+                             RadiosityState& state, unsigned pass, int threads, double power_per_line,
+                             unsigned long long seed, std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines);
 
 }  // namespace mpath
