@@ -88,7 +88,7 @@ void log_remaining(const Options& options, const BoxStore* store, const Radiosit
   const double e = state.emitted_total();
   spdlog::info("energy: unshot {:.3e} and held in ARs {:.3e} of emitted, balance residual {:.2e} (relative)",
                state.unshot_total() / e, state.held_total() / e, state.energy_residual() / e);
-  if (store) {
+  if (store && !store->line_sets()) {  // what waits in walls, with the paper's transport
     const Remaining r = remaining_power(*store, state);
     spdlog::info("left to distribute: unshot {:.2e}, entering boxes {:.2e}, leaving boxes {:.2e} of emitted; most in box {} "
                  "({:.2e}); no stored line can carry {:.2e} (faces {:.2e}, ARs {:.2e})",

@@ -62,7 +62,7 @@ struct Options {
 
   struct Solver {
     SolverMethod method = SolverMethod::hierarchical;
-    int iterations = 10;
+    int iterations = 100;  // a cap: runs stop at solver.tolerance (high reflectance needs tens)
     double tolerance = 1e-3;
     // Stored-line methods: later iterations stream a share of each box's
     // lines in proportion to the power left (docs/algorithm.md).
