@@ -486,7 +486,8 @@ def document(args, runs, speed, memory, bias, figures, meta):
     w("## Memory (paper table 4)")
     w("")
     w("At the largest hierarchical budget, seed %s. *AR memory*: the power held in the subscene walls' angular"
-      " regions, the solver's only per-box state; *store*: the compressed intersection lists on disk." % args.seeds[0])
+      " regions (the paper's transport; the default line sets hold none, their per-face pools of each class are in"
+      " the solve's RSS); *store*: the compressed intersection lists on disk." % args.seeds[0])
     w("")
     w("| scene | lines | boxes | ARs | AR memory (MB) | store (MB) | preprocess peak RSS (MiB) |"
       " hier. solve peak RSS (MiB) | classic solve peak RSS (MiB) |")
@@ -598,37 +599,38 @@ from this run's CSVs; what follows explains them, from the profiles in
 - **Where the hierarchy wins.** A subscene's lines are spent inside its
   box: a small box (a ceiling lamp in its shade, a table with its chairs)
   gets many times the line density a classic pass gives it for the same
-  total, its solve streams short intersection lists with the box's faces in
-  cache, and a rerun on a kept store never traces a line. Where the
+  total, and with the default line-set transport those lines add to the
+  root's for every exchange inside the box (docs/algorithm.md, "Line-set
+  transport"). A rerun on a kept store never traces a line. Where the
   subscenes are small and bright, the hierarchical error at equal lines is
   lower than classic's and the solve wins on both counts.
 - **Where it loses.** A first run pays for tracing, encoding and
   compressing every line once (`mpath-preprocess`), about what classic's
   whole solve costs for the same lines (classic's later passes cast few
-  lines). Where a subscene is large (on OFFICE one box holds every desk
-  with its keyboards, monitors and both table lamps, another every shelf
-  and stack: 58,000 of the 87,000 patches), it is sampled no more densely
-  than the root, and its patches see only its own lines, where classic's
-  see every line: the hierarchical error at equal lines is then higher.
-  On OFFICE the relative RMS error is dominated by the insides of the two
-  table lamps' shades (0.7 m2 a hundred times brighter than the walls:
-  45 % of classic's squared error at 8M lines and 64 % of the
-  hierarchy's, measured once on this code), which lie in that desk box.
-- **Bias.** Power crossing a subscene wall is carried by its angular
-  region (24 directions per virtual patch), not by the exact line, so the
-  hierarchical solution converges to a slightly different answer. Its
-  size is the difference of the two long references, next to what their
-  own noise explains (above, per scene).
+  lines). The exchanges that only the root's lines carry (a wall with the
+  rest of the room) get `lines.root_fraction` (0.8) of the lines, so where
+  they dominate the error the hierarchy errs up to 1/sqrt(0.8) = 1.12 times
+  as much as stored-line Multipath at equal lines. Where a subscene is large
+  (on OFFICE one box holds every desk with its keyboards, monitors and both
+  table lamps), its lines are hardly denser than the root's. On OFFICE the
+  relative RMS error is dominated by the insides of the two table lamps'
+  shades, which lie in that desk box.
+- **Bias.** The default line sets approximate nothing: their long run
+  differs from the long classic run by what the two runs' own noise
+  explains (the bias table per scene). The paper's transport
+  (`hierarchy.transport = "transmittance"`, its long run in the same
+  table) carries power across subscene walls by angular regions and
+  transmittances per AR, and converges to another answer: the difference
+  that its row shows beyond the noise, and more power escaping where the
+  scene is open.
 - **What limits it.** The solve is bound by the transport loop (random
-  access to face records) and chunk decoding; the first run by the
-  preprocessor's own work per line beyond Embree (line generation, child
-  box slab tests, AR lookups, sorting a chunk's lines for compression,
-  encoding, zstd). Closing the OFFICE target would take a hierarchy that
-  keeps small bright parts (a table lamp) as subscenes of their own
-  instead of dissolving them into a large one at the one level used by
-  default (deeper hierarchies measured worse: every level samples its
-  children's space again), a line budget that follows where the light is
-  rather than box surface, and a cheaper preprocessor.
+  access to face records, the class of each crossing) and chunk decoding,
+  and a store is read once more when opened (the line sets' counts); the
+  first run by the preprocessor's own work per line beyond Embree (line
+  generation, sorting a chunk's lines for compression, encoding, zstd).
+  Closing the OFFICE target would take a hierarchy that keeps small bright
+  parts (a table lamp) as subscenes of their own, a line budget that follows
+  where the light is rather than box surface, and a cheaper preprocessor.
 """
 
 
