@@ -143,7 +143,6 @@ LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh, int thre
   for (size_t f = 0; f < faces; ++f)
     if (!face_shares(counts, sets.face_slot[f], sets.face_slot[f + 1], &sets.alpha[sets.face_slot[f]]))
       sets.uncarried.push_back(static_cast<int>(f));
-  sets.carriers = std::move(counts.carriers);
   return sets;
 }
 

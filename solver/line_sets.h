@@ -36,7 +36,6 @@ struct LineSets {
   std::vector<int> depth, parent;   // per box
   std::vector<uint32_t> face_slot;  // per mesh face: first slot (its own box's class), then up to the root
   std::vector<double> alpha;        // per slot: the share of the face's power in that class
-  std::vector<double> carriers;     // per slot: the crossings of every line set that carry the class at the face
   std::vector<int> uncarried;       // faces no line can carry: shot with local lines
   size_t slots() const { return face_slot.back(); }
   // The smallest box holding boxes a and b.
