@@ -113,6 +113,10 @@ TEST(Cli, BadInputGivesAClearErrorAndNoResult) {
   expect_failure("s.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl wood\nf 1 2 3\n", "", "",
                  "s.obj:5: unknown material 'wood'");
   expect_failure("s.obj", kTriangle, "[scene.emitters]\nwood = [1, 1, 1]\n", "", "unknown material 'wood'");
+  expect_failure("s.obj", kTriangle, "", "scene.emitters.lamp=1e300",
+                 "material 'lamp': emission 1e+300 W/sr/m2 is above 1e+12");
+  expect_failure("s.obj", kTriangle, "[[camera]]\nname = \"../x\"\nposition = [0, 0, 5]\n", "",
+                 "'camera[0].name': '../x' is not a plain file name");
   expect_failure("s.obj", "v 0 0 NaN\n", "", "", "s.obj:1: expected a finite number for z, got 'NaN'");
   expect_failure("s.obj", kTriangle, "solver.threds = 2\n", "", "run.toml:4: unknown config key 'solver.threds'");
   expect_failure("s.obj", kTriangle, "lines.total = \"many\"\n", "",

@@ -102,6 +102,14 @@ height = 32
   EXPECT_EQ(o.cameras[0].width, 64);
   write_file(dir / "cam.toml", "scene.file = \"a.obj\"\n[[camera]]\nposition = [0, 0, 0]\nlook_at = [0, 0, 0]\n");
   EXPECT_NE(error_of(dir / "cam.toml").find("camera position equals look_at"), std::string::npos);
+  // A camera's name names files in output.dir: never a path, never twice.
+  write_file(dir / "path.toml", "scene.file = \"a.obj\"\n[[camera]]\nname = \"../../x\"\nposition = [0, 1, 5]\n");
+  EXPECT_NE(error_of(dir / "path.toml").find("'camera[0].name': '../../x' is not a plain file name"), std::string::npos)
+      << error_of(dir / "path.toml");
+  write_file(dir / "twice.toml", "scene.file = \"a.obj\"\n[[camera]]\nname = \"c\"\nposition = [0, 1, 5]\n"
+                                 "[[camera]]\nname = \"c\"\nposition = [0, 2, 5]\n");
+  EXPECT_NE(error_of(dir / "twice.toml").find("cameras 0 and 1 are both named 'c'"), std::string::npos)
+      << error_of(dir / "twice.toml");
   write_file(dir / "neg.toml", "scene.file = \"a.obj\"\n[scene.emitters]\nlamp = [1, -1, 0]\n");
   EXPECT_NE(error_of(dir / "neg.toml").find("must not be negative"), std::string::npos);
 }

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include <cstring>
 #include <numbers>
 
@@ -84,6 +87,20 @@ TEST(PlyReader, ReadsAsciiAndBothBinaryByteOrdersAlike) {
   for (const char* name : {"a.ply", "le.ply", "be.ply"}) {
     SCOPED_TRACE(name);
     expect_two_triangles(read_ply(dir / name));
+  }
+}
+
+// A solution with a value no float holds is never written (no Inf or NaN in a result).
+TEST(SolutionPly, RefusesValuesNoFloatHolds) {
+  TempDir dir;
+  const Scene scene = test::furnace_scene(0.5, 1.0);
+  const PatchMesh mesh = build_mesh(scene, 0.5);
+  RadiosityState state = make_state(scene, mesh);
+  for (const double bad : {1e300, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    state.phi[state.at(3, 0)] = bad;
+    EXPECT_THROW(write_solution_ply(dir / "solution.ply", mesh, state.solution_faces(mesh)), std::runtime_error)
+        << bad;
+    EXPECT_FALSE(std::filesystem::exists(dir / "solution.ply")) << bad;
   }
 }
 

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -101,6 +103,20 @@ Rgb get_rgb(const toml::node& node, const ValueSource& src) {
   return {v.x, v.y, v.z};
 }
 
+// A camera's name names its files in output.dir (NAME.exr, NAME.png): a plain
+// file name, never a path.
+std::string get_camera_name(const toml::node& node, const ValueSource& src) {
+  const std::string name = get_string(node, src);
+  const bool plain = !name.empty() && name.size() <= 100 && name[0] != '.' &&
+                     std::all_of(name.begin(), name.end(), [](unsigned char c) {
+                       return std::isalnum(c) || c == '_' || c == '-' || c == '.';
+                     });
+  if (!plain)
+    bad_value(src, fmt::format("'{}' is not a plain file name (letters, digits, '_', '-', '.', not starting with "
+                               "'.', at most 100 characters): it names the camera's files in output.dir", name));
+  return name;
+}
+
 CameraOptions get_camera(const toml::table& table, const ValueSource& parent, size_t index) {
   CameraOptions cam;
   cam.name = fmt::format("camera{}", index);
@@ -108,7 +124,7 @@ CameraOptions get_camera(const toml::table& table, const ValueSource& parent, si
     ValueSource src = parent;
     src.key = fmt::format("{}[{}].{}", parent.key, index, std::string(k.str()));
     const std::string key(k.str());
-    if (key == "name") cam.name = get_string(node, src);
+    if (key == "name") cam.name = get_camera_name(node, src);
     else if (key == "position") cam.position = get_vec3(node, src);
     else if (key == "look_at") cam.look_at = get_vec3(node, src);
     else if (key == "up") cam.up = get_vec3(node, src);
@@ -280,7 +296,13 @@ std::vector<ConfigKey> make_table() {
            }
            const toml::array* a = n.as_array();
            if (!a || !a->is_array_of_tables()) bad_value(s, "expected [[camera]] tables");
-           for (size_t i = 0; i < a->size(); ++i) o.cameras.push_back(get_camera(*a->get(i)->as_table(), s, i))),
+           for (size_t i = 0; i < a->size(); ++i) {
+             o.cameras.push_back(get_camera(*a->get(i)->as_table(), s, i));
+             for (size_t j = 0; j < i; ++j)
+               if (o.cameras[j].name == o.cameras[i].name)
+                 bad_value(s, fmt::format("cameras {} and {} are both named '{}' (their files would overwrite each "
+                                          "other)", j, i, o.cameras[i].name));
+           }),
        [](const Options& o) {
          if (o.cameras.empty()) return toml::array{};
          toml::array cameras;

@@ -2,7 +2,10 @@
 
 #include <bit>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
+#include <stdexcept>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -25,6 +28,13 @@ void put(std::ostream& out, T v) {
 }  // namespace
 
 void write_solution_ply(const std::filesystem::path& path, const PatchMesh& mesh, const std::vector<SolutionFace>& faces) {
+  // Never a NaN or an infinity in a result: a value no float holds stops the write before anything is written.
+  for (size_t f = 0; f < faces.size(); ++f)
+    for (const Rgb* values : {&faces[f].rho, &faces[f].exitance, &faces[f].radiosity})
+      for (double v : *values)
+        if (!(std::fabs(v) <= std::numeric_limits<float>::max()))
+          throw std::runtime_error(fmt::format("{}: face {} has a value no float holds ({}); nothing written",
+                                               path.string(), f, v));
   AtomicFile file(path);
   std::ostream& out = file.stream();
   out << "ply\nformat binary_little_endian 1.0\n"

@@ -46,6 +46,11 @@ void validate_material(const Material& m, const std::string& where) {
       throw InputError(fmt::format("{}: material '{}': reflectance {} is outside [0, 1)", where, m.name, m.rho[c]));
     if (!(m.emission[c] >= 0.0) || !std::isfinite(m.emission[c]))
       throw InputError(fmt::format("{}: material '{}': emission {} must be finite and >= 0", where, m.name, m.emission[c]));
+    // Far above any light source (the sun's disc is about 2e7), and far enough
+    // below the float range of solution.ply for any reflectance below 1.
+    if (m.emission[c] > kMaxEmission)
+      throw InputError(fmt::format("{}: material '{}': emission {} W/sr/m2 is above {:g} (mpath's limit; scale the "
+                                   "scene's emission down)", where, m.name, m.emission[c], kMaxEmission));
   }
 }
 

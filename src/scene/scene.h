@@ -45,7 +45,10 @@ struct Scene {
 Vec3 newell_normal(const std::vector<Vec3>& vertices);
 double polygon_area(const std::vector<Vec3>& vertices);
 
-// Checks a material read from `path`: reflectances in [0, 1), emission finite and >= 0.
+// The largest emitted radiance a material may have, W/sr/m2.
+inline constexpr double kMaxEmission = 1e12;
+
+// Checks a material read from `path`: reflectances in [0, 1), emission finite, >= 0 and at most kMaxEmission.
 void validate_material(const Material& m, const std::string& where);
 
 }  // namespace mpath
