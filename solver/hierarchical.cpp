@@ -283,8 +283,7 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
   const int ch = state.channels;
   const uint64_t chunks = in.parts.size();
   const bool every_line = in.fraction >= 1.0;
-  uint64_t pass_lines = 0;
-  for (const ChunkPart& p : in.parts) pass_lines += p.lines;
+  const uint64_t pass_lines = part_lines(in.parts, 0, chunks);
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
   std::vector<BoxShard> acc(shards);
   tbb::parallel_for(0, shards, [&](int s) {
@@ -296,30 +295,21 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
     a.child_used.assign(in.child.size(), 0.0);
     // With every line, the exact crossing counts make the shares add up to
     // each quota; with a part of them, each shard may send its part only.
-    uint64_t shard_lines = 0;
-    for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) shard_lines += in.parts[i].lines;
-    const double allowance = every_line || pass_lines == 0 ? 1.0 : double(shard_lines) / double(pass_lines);
-    linestore::DecodedChunk chunk;
-    std::vector<uint32_t> order;
-    for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) {
-      const uint64_t c = in.parts[i].chunk;
-      store.read(b, c, chunk);
-      if (!chunk_fits(in, chunk))
-        throw InputError(fmt::format("store: box {} chunk {} names patches, boxes or ARs the box does not have "
-                                     "(damaged or foreign store); run mpath-preprocess again", b, c));
-      // A random order (see chunk_line_order); an adaptive pass takes the
-      // first `take` of it, a random subset of the chunk.
-      const size_t n = chunk.lines();
-      const size_t take = std::min<size_t>(n, in.parts[i].lines);
-      chunk_line_order(pass, b, c, n, order);
-      for (size_t k = 0; k < take; ++k) {
-        const uint32_t l = order[k];
-        (ch == 1 ? transport_box_line<1> : transport_box_line<3>)(
-            in, chunk.events.data() + chunk.first[l], chunk.first[l + 1] - chunk.first[l], chunk.entry_ar[l],
-            chunk.exit_ar[l], a, allowance);
-      }
-      progress.advance(take);
-    }
+    const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
+    const double allowance =
+        every_line || pass_lines == 0 ? 1.0 : double(part_lines(in.parts, lo, hi)) / double(pass_lines);
+    stream_pass_lines(
+        store, b, in.parts, lo, hi, pass, progress,
+        [&](const linestore::DecodedChunk& chunk, uint64_t c) {
+          if (!chunk_fits(in, chunk))
+            throw InputError(fmt::format("store: box {} chunk {} names patches, boxes or ARs the box does not have "
+                                         "(damaged or foreign store); run mpath-preprocess again", b, c));
+        },
+        [&](const linestore::DecodedChunk& chunk, uint32_t l) {
+          (ch == 1 ? transport_box_line<1> : transport_box_line<3>)(
+              in, chunk.events.data() + chunk.first[l], chunk.first[l + 1] - chunk.first[l], chunk.entry_ar[l],
+              chunk.exit_ar[l], a, allowance);
+        });
   });
   // Merge in shard order: faces, the box's Out, the children's In, and what
   // no line took back where it was held.

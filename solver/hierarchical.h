@@ -8,9 +8,11 @@
 // shards. With the root box alone this is stored-line Multipath.
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #include "box_store.h"
+#include "progress.h"
 #include "iteration.h"
 #include "radiosity_state.h"
 #include "tracer.h"
@@ -80,6 +82,35 @@ struct ChunkPart {
 // chunks from a place that moves from pass to pass, and the first lines of
 // the last. Every line when `fraction` is 1.
 std::vector<ChunkPart> pass_parts(const BoxStore& store, int b, double fraction, unsigned pass);
+
+// Lines in parts [lo, hi).
+inline uint64_t part_lines(const std::vector<ChunkPart>& parts, uint64_t lo, uint64_t hi) {
+  uint64_t n = 0;
+  for (uint64_t i = lo; i < hi; ++i) n += parts[i].lines;
+  return n;
+}
+
+// One shard's lines of a pass over box b: for each part in [lo, hi) its
+// chunk is read and checked (`check(chunk, c)`, which throws on a damaged
+// one), then the part's lines are taken in the pass's random order
+// (chunk_line_order; an adaptive pass takes the first of them, a random
+// subset of the chunk): `line(chunk, l)` for each.
+template <typename Check, typename Line>
+void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart>& parts, uint64_t lo, uint64_t hi,
+                       unsigned pass, Progress& progress, const Check& check, const Line& line) {
+  linestore::DecodedChunk chunk;
+  std::vector<uint32_t> order;
+  for (uint64_t i = lo; i < hi; ++i) {
+    const uint64_t c = parts[i].chunk;
+    store.read(b, c, chunk);
+    check(chunk, c);
+    const size_t n = chunk.lines();
+    const size_t take = std::min<size_t>(n, parts[i].lines);
+    chunk_line_order(pass, b, c, n, order);
+    for (size_t k = 0; k < take; ++k) line(chunk, order[k]);
+    progress.advance(take);
+  }
+}
 
 // One iteration: MP(root) and, depth by depth, MP of every box. Each box's
 // pass takes every line of the box (exact crossing counts) when

@@ -336,33 +336,23 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     face.later = face.carried < sets.face_slot[g + 1] - sets.face_slot[g];
   }
   const uint64_t chunks = parts.size();
-  uint64_t pass_lines = 0;
-  for (const ChunkPart& p : parts) pass_lines += p.lines;
+  const uint64_t pass_lines = part_lines(parts, 0, chunks);
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
   std::vector<SetShard> acc(shards);
   tbb::parallel_for(0, shards, [&](int s) {
     SetShard& a = acc[s];
     a.entries.assign(entries, EntryAcc{});
     a.faces.assign(faces, FaceAcc{});
-    uint64_t shard_lines = 0;
-    for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) shard_lines += parts[i].lines;
-    a.allowance = pass_lines ? double(shard_lines) / double(pass_lines) : 0.0;
-    linestore::DecodedChunk chunk;
-    std::vector<uint32_t> order;
-    for (uint64_t i = chunks * s / shards; i < chunks * (s + 1) / shards; ++i) {
-      const uint64_t c = parts[i].chunk;
-      store.read(x, c, chunk);
-      check_chunk(box, chunk, x, c);
-      const size_t take = std::min<size_t>(chunk.lines(), parts[i].lines);
-      chunk_line_order(pass, x, c, chunk.lines(), order);
-      for (size_t k = 0; k < take; ++k) {
-        const uint32_t l = order[k];
-        const Event* ev = chunk.events.data() + chunk.first[l];
-        const int m = static_cast<int>(chunk.first[l + 1] - chunk.first[l]);
-        (ch == 1 ? transport_set_line<1> : transport_set_line<3>)(in, ev, m, a);
-      }
-      progress.advance(take);
-    }
+    const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
+    a.allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
+    stream_pass_lines(
+        store, x, parts, lo, hi, pass, progress,
+        [&](const linestore::DecodedChunk& chunk, uint64_t c) { check_chunk(box, chunk, x, c); },
+        [&](const linestore::DecodedChunk& chunk, uint32_t l) {
+          const Event* ev = chunk.events.data() + chunk.first[l];
+          const int m = static_cast<int>(chunk.first[l + 1] - chunk.first[l]);
+          (ch == 1 ? transport_set_line<1> : transport_set_line<3>)(in, ev, m, a);
+        });
   });
   // Merge in shard order: the quota sent, what each class gathered and did
   // not send (back to its pool), what waits for the boxes above.
