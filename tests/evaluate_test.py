@@ -11,15 +11,12 @@ import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import Checks  # noqa: E402
 
 
 def main():
-    failures = []
-
-    def check(ok, what):
-        if not ok:
-            failures.append(what)
-            print("FAILED: " + what)
+    check = Checks("evaluation driver")
 
     with tempfile.TemporaryDirectory(prefix="mpath-evaluate-") as tmp:
         docs = os.path.join(tmp, "docs")
@@ -65,9 +62,7 @@ def main():
         again = open(os.path.join(docs, "results.md")).read()
         strip = lambda t: [l for l in t.splitlines() if not l.startswith("Written by")]
         check(strip(again) == strip(text), "--report-only gives the same tables")
-    if failures:
-        sys.exit("%d check(s) failed" % len(failures))
-    print("all checks passed")
+    check.finish()
 
 
 if __name__ == "__main__":

@@ -10,17 +10,14 @@ import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import Checks  # noqa: E402
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 from solution import read_solution  # noqa: E402
 
 
 def main(solve):
-    failures = []
-
-    def check(ok, what):
-        if not ok:
-            failures.append(what)
-            print("FAILED: " + what)
+    check = Checks("solution reader")
 
     with tempfile.TemporaryDirectory(prefix="mpath-solution-") as tmp:
         subprocess.check_call([solve, os.path.join(ROOT, "configs/cornell_box.toml"), "-q", "solver.method=classic",
@@ -44,9 +41,8 @@ def main(solve):
             check(False, "a file cut short is refused")
         except ValueError as e:
             check("cut short" in str(e), f"the refusal says why: {e}")
-    print(f"solution reader: {len(failures)} check(s) failed" if failures else "solution reader: all checks passed")
-    return 1 if failures else 0
+    check.finish()
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1]))
+    main(sys.argv[1])
