@@ -51,6 +51,13 @@ struct StoreBox {
   double coverage = 1;
 };
 
+// The local face of a stored patch crossing turned towards `dir` along the
+// line (+1: the way the line runs; -1: back); -1 for a black back side.
+inline int face_towards(const StoreBox& box, const linestore::Event& e, int dir) {
+  const auto& f = box.local_faces[e.id];
+  return (dir > 0) == e.along ? f[0] : f[1];
+}
+
 class BoxStore {
  public:
   // Throws InputError naming the mismatching key, the differing hierarchy, or

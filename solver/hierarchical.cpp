@@ -222,9 +222,8 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
   for (int i = 0; i < n; ++i) {
     const Event& e = ev[i];
     if (e.kind == Event::patch) {
-      const auto& f = in.box->local_faces[e.id];
-      send_face(e.along ? f[0] : f[1], i, +1);
-      send_face(e.along ? f[1] : f[0], i, -1);
+      send_face(face_towards(*in.box, e, +1), i, +1);
+      send_face(face_towards(*in.box, e, -1), i, -1);
     } else {
       const uint32_t base = in.child_base[e.id];
       send_ar(in.child[base + e.exit_ar], shard.child_used[base + e.exit_ar], i, +1);
@@ -247,9 +246,8 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
       }
       const Event& e = ev[j];
       if (e.kind == Event::patch) {
-        const auto& f = in.box->local_faces[e.id];
         // The face turned towards the power: the back when it travels along the line.
-        const int face = (s.dir > 0) == e.along ? f[1] : f[0];
+        const int face = face_towards(*in.box, e, -s.dir);
         if (face < 0) {
           for (int c = 0; c < ch; ++c) acc.absorbed[c] += p[c];
           break;

@@ -24,11 +24,6 @@ inline int pair_class(const LineSets& sets, const LineSetBox& lines, bool root, 
   return sets.depth[a] - sets.depth[sets.common_box(a, lines.owner[ev[j].id])];
 }
 
-// The face of local patch `id` turned towards `dir` along the line.
-inline int face_towards(const StoreBox& box, const Event& e, int dir) {
-  const auto& f = box.local_faces[e.id];
-  return (dir > 0) == e.along ? f[0] : f[1];
-}
 
 void check_chunk(const StoreBox& box, const linestore::DecodedChunk& chunk, int x, uint64_t c) {
   for (const Event& e : chunk.events)
