@@ -12,7 +12,7 @@ namespace mpath {
 
 namespace {
 
-constexpr char kMagic[8] = {'M', 'P', 'C', 'K', 'P', 'T', '3', '\0'};
+constexpr char kMagic[8] = {'M', 'P', 'C', 'K', 'P', 'T', '2', '\0'};
 
 template <typename T>
 void put(std::ostream& out, const T& v) {
@@ -88,6 +88,7 @@ void write_checkpoint(const std::filesystem::path& path, const std::string& key,
   put_doubles(out, state.unshot);
   put_doubles(out, state.ar_in);
   put_doubles(out, state.ar_out);
+  put_doubles(out, state.pooled);
   for (const auto* a : {&state.energy.emitted, &state.energy.absorbed, &state.energy.escaped})
     for (double v : *a) put(out, v);
   put(out, log.first_unshot);
@@ -118,6 +119,7 @@ void read_checkpoint(const std::filesystem::path& path, const std::string& key, 
   in.get_doubles(state.unshot, state.unshot.size());
   in.get_doubles(state.ar_in, state.ar_in.size());
   in.get_doubles(state.ar_out, state.ar_out.size());
+  in.get_doubles(state.pooled, state.pooled.size());
   for (auto* a : {&state.energy.emitted, &state.energy.absorbed, &state.energy.escaped})
     for (double& v : *a) v = in.get<double>();
   log.first_unshot = in.get<double>();

@@ -26,6 +26,7 @@ constexpr unsigned kLineOrderPurpose = 8;  // + box: the order of a pass through
 void add_ar_state(const BoxStore& store, RadiosityState& state) {
   state.ar_in.assign(store.ar_total() * state.channels, 0.0);
   state.ar_out.assign(store.ar_total() * state.channels, 0.0);
+  state.pooled.assign(store.line_sets() ? store.line_sets()->slots() * state.channels : 0, 0.0);
 }
 
 namespace {

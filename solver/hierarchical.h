@@ -95,20 +95,11 @@ inline uint64_t part_lines(const std::vector<ChunkPart>& parts, uint64_t lo, uin
 // one), then the part's lines are taken in the pass's random order
 // (chunk_line_order; an adaptive pass takes the first of them, a random
 // subset of the chunk): `line(chunk, l)` for each.
-// `buffers` may be kept across calls (one per shard), so that a pass of many
-// short runs does not allocate a chunk's memory for each.
-struct PassLineBuffers {
-  linestore::DecodedChunk chunk;
-  std::vector<uint32_t> order;
-};
 template <typename Check, typename Line>
 void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart>& parts, uint64_t lo, uint64_t hi,
-                       unsigned pass, Progress& progress, const Check& check, const Line& line,
-                       PassLineBuffers* buffers = nullptr) {
-  PassLineBuffers own;
-  PassLineBuffers& buf = buffers ? *buffers : own;
-  linestore::DecodedChunk& chunk = buf.chunk;
-  std::vector<uint32_t>& order = buf.order;
+                       unsigned pass, Progress& progress, const Check& check, const Line& line) {
+  linestore::DecodedChunk chunk;
+  std::vector<uint32_t> order;
   for (uint64_t i = lo; i < hi; ++i) {
     const uint64_t c = parts[i].chunk;
     store.read(b, c, chunk);

@@ -82,23 +82,21 @@ void count_box(const BoxStore& store, LineSets& sets, int x, int threads, SlotCo
   }
 }
 
-// Per box: its lines' crossings per unit area of the faces they see (the
-// lines are uniform and isotropic in the box, so this is one number per box,
-// estimated from all its faces at once).
-std::vector<double> box_densities(const BoxStore& store, const PatchMesh& mesh, const LineSets& sets,
-                                  const SlotCounts& counts) {
-  std::vector<double> density(store.box_count(), 0.0);
-  for (size_t x = 0; x < store.box_count(); ++x) {
-    const StoreBox& box = store.box(static_cast<int>(x));
-    const LineSetBox& lines = sets.boxes[x];
-    double crossings = 0, area = 0;
-    for (size_t f = 0; f < box.face_global.size(); ++f) {
-      crossings += counts.crossings[lines.slot[lines.entry[f + 1] - 1]];
-      area += mesh.face_area(box.face_global[f]);
-    }
-    density[x] = area > 0 ? crossings / area : 0.0;
+// The shares of a face's power among its classes (its own box first, the
+// root last). A line of box Y at the face meets next a patch of class k (one
+// not above Y) with probability alpha_k, so the carriers' crossings of class
+// k over all crossings of the face by the carriers' lines estimate alpha_k
+// from every line that can see it. False when no line carries any class.
+bool face_shares(const SlotCounts& counts, uint32_t first, uint32_t end, double* alpha) {
+  double sum = 0, seen = 0;
+  for (uint32_t s = end; s-- > first;) {
+    seen += counts.crossings[s];  // the crossings of every box from this class's up to the root
+    alpha[s - first] = seen > 0 ? counts.carriers[s] / seen : 0.0;
+    sum += alpha[s - first];
   }
-  return density;
+  if (!(sum > 0)) return false;
+  for (uint32_t s = first; s < end; ++s) alpha[s - first] /= sum;
+  return true;
 }
 
 }  // namespace
@@ -136,61 +134,55 @@ LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh, int thre
   SlotCounts counts;
   for (auto* v : {&counts.crossings, &counts.carriers}) v->assign(sets.slots(), 0.0);
   for (size_t x = 0; x < store.box_count(); ++x) count_box(store, sets, static_cast<int>(x), threads, counts);
-  sets.density = box_densities(store, mesh, sets, counts);
-  // A class's carriers are its own box and every box above it.
-  sets.weight.assign(sets.slots(), 0.0);
-  for (size_t f = 0; f < faces; ++f) {
-    int b = h.patch_box[mesh.face_patch[f]];
-    bool carried = false;
-    for (uint32_t s = sets.face_slot[f]; s < sets.face_slot[f + 1]; ++s, b = h.boxes[b].parent) {
-      double d = 0;
-      for (int y = b; y >= 0; y = h.boxes[y].parent) d += sets.density[y];
-      sets.weight[s] = d > 0 ? 1.0 / d : 0.0;
-      carried |= counts.carriers[s] > 0 && d > 0;
-    }
-    if (!carried) sets.uncarried.push_back(static_cast<int>(f));
-  }
+  sets.alpha.assign(sets.slots(), 0.0);
+  for (size_t f = 0; f < faces; ++f)
+    if (!face_shares(counts, sets.face_slot[f], sets.face_slot[f + 1], &sets.alpha[sets.face_slot[f]]))
+      sets.uncarried.push_back(static_cast<int>(f));
   return sets;
 }
 
 namespace {
 
-// Which lines each box's pass takes this iteration, and per face the sum
-// of 1 / D over the carrying crossings of those lines (expected).
-struct Plan {
-  std::vector<double> fraction;               // per box: of its lines, the share this iteration takes
+// The power of each class in flight during an iteration: taken from the
+// pools at the start of the class's own box's pass, sent by that pass and
+// those of the boxes above, what is left returned at the end.
+struct Flight {
+  std::vector<double> quota;  // slot * channels
+  std::vector<double> used;   // per slot: fraction of the quota sent
+  std::vector<double> share;  // per slot: of the quota, what one carrying crossing sends
+  std::vector<double> fraction;             // per box: of its lines, the share this iteration takes
   std::vector<std::vector<ChunkPart>> parts;  // per box: which
-  std::vector<double> z;                      // per mesh face
 };
 
-// What a pass reads of a face and of an entry (a face a box sees and a
-// class it carries there), each in one record.
+// What a pass reads of an entry (a face and one of the classes the box
+// carries there) and of a face, each in one record.
+struct EntryInput {
+  double quota[3] = {0, 0, 0};  // the class's power in flight
+  double share = 0;             // of it, what one carrying crossing sends
+  double expected = 0;          // a part of the lines: the share of the quota the pass may send in all
+  double alpha = 0;             // the class's share of what the face receives
+};
 struct FaceIn {
-  double quota[3] = {0, 0, 0};  // its unshot power, taken at the start of the pass
   double rho[3] = {0, 0, 0};
-  double scale = 0;             // 1 / z: of the quota, what a crossing of weight 1 sends
-};
-struct EntryIn {
-  double share;  // of the face's quota, what one crossing sends: (1 / D) / z
-  double take;   // of what the face gathered, the share one crossing sends on: D_min / D
-};
-struct LocalFace {
-  int face;        // mesh face
-  uint32_t entry;  // its first entry in the box
+  uint32_t entry = 0, carried = 0;  // its entries, and how many
+  bool later = false;               // it has classes above the box
 };
 
-// A shard's private accumulators for a pass.
-struct alignas(64) FaceAcc {
-  double gathered[3] = {0, 0, 0};  // received, sent on by its next carrying crossings
+// A shard's private accumulators for one box's pass.
+struct alignas(32) EntryAcc {
+  double gathered[3] = {0, 0, 0};  // received, sent on along the next crossing of its class
   double used = 0;                 // fraction of the quota sent
+};
+struct FaceAcc {
   double phi_gain[3] = {0, 0, 0};
+  double later[3] = {0, 0, 0};  // received, for the classes of boxes above this one
 };
 struct alignas(128) SetShard {
-  std::vector<FaceAcc> faces;      // per mesh face
-  PassLineBuffers buffers;
-  std::vector<double> allowance;   // per mesh face: of its quota, the shard's part (a part of the lines)
-  std::vector<BoxPassStats> boxes;
+  std::vector<EntryAcc> entries;
+  std::vector<FaceAcc> faces;
+  double allowance = 1;  // of each entry's expected part, the shard's (a part of the lines)
   std::array<double, 3> absorbed{}, escaped{};
+  uint64_t lines = 0, hits = 0;
   struct Send {
     int from, dir;
     double power[3];
@@ -199,45 +191,43 @@ struct alignas(128) SetShard {
 };
 
 struct PassContext {
-  const BoxStore* store;
+  const StoreBox* box;
+  const LineSetBox* lines;
   const LineSets* sets;
-  std::vector<FaceIn> faces;                 // per mesh face
-  std::vector<std::vector<EntryIn>> entries;  // per box, per entry
-  std::vector<std::vector<LocalFace>> local;  // per box, per local face
-  bool capped;  // a part of the lines: no shard sends more than its part of a quota
+  std::vector<EntryInput> entries;
+  std::vector<FaceIn> faces;
+  bool root;
+  bool capped;  // a part of the lines: no shard sends more than its part of an entry's expected share
 };
 
 template <int CH>
-void transport_set_line(const PassContext& in, int x, const Event* ev, int n, SetShard& shard) {
+void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard& shard) {
   constexpr int ch = CH;
+  ++shard.lines;
+  shard.hits += n;
   if (n == 0) return;
-  const StoreBox& box = in.store->box(x);
+  const StoreBox& box = *in.box;
+  const LineSetBox& lines = *in.lines;
   const LineSets& sets = *in.sets;
-  const LineSetBox& lines = sets.boxes[x];
-  const std::vector<EntryIn>& entries = in.entries[x];
-  const std::vector<LocalFace>& local_faces = in.local[x];
-  const bool root = x == 0;
   auto& sends = shard.sends;
   sends.clear();
   for (int i = 0; i < n; ++i)
     for (const int dir : {+1, -1}) {
-      const int local = face_towards(box, ev[i], dir);
-      if (local < 0) continue;
-      const int k = pair_class(sets, lines, root, ev, n, i, i + dir);
+      const int face = face_towards(box, ev[i], dir);
+      if (face < 0) continue;
+      const int k = pair_class(sets, lines, in.root, ev, n, i, i + dir);
       if (k < 0) continue;
-      const LocalFace& lf = local_faces[local];
-      const EntryIn& entry = entries[lf.entry + static_cast<uint32_t>(k)];
-      const FaceIn& face = in.faces[lf.face];
-      FaceAcc& acc = shard.faces[lf.face];
-      double share = entry.share;
-      if (in.capped) share = std::max(0.0, std::min(share, shard.allowance[lf.face] - acc.used));
+      const uint32_t e = in.faces[face].entry + static_cast<uint32_t>(k);
+      const EntryInput& input = in.entries[e];
+      EntryAcc& acc = shard.entries[e];
+      double share = input.share;
+      if (in.capped) share = std::max(0.0, std::min(share, input.expected * shard.allowance - acc.used));
       acc.used += share;
       SetShard::Send s{i, dir, {0, 0, 0}};
       bool any = false;
       for (int c = 0; c < ch; ++c) {
-        const double on = acc.gathered[c] * entry.take;
-        s.power[c] = face.quota[c] * share + on;
-        acc.gathered[c] -= on;
+        s.power[c] = input.quota[c] * share + acc.gathered[c];
+        acc.gathered[c] = 0;
         any |= s.power[c] != 0;
       }
       if (any) sends.push_back(s);
@@ -248,143 +238,137 @@ void transport_set_line(const PassContext& in, int x, const Event* ev, int n, Se
       for (int c = 0; c < ch; ++c) shard.escaped[c] += s.power[c];
       continue;
     }
-    const int local = face_towards(box, ev[j], -s.dir);  // turned towards the power
-    if (local < 0) {
+    const int face = face_towards(box, ev[j], -s.dir);  // turned towards the power
+    if (face < 0) {
       for (int c = 0; c < ch; ++c) shard.absorbed[c] += s.power[c];
       continue;
     }
-    const size_t face = static_cast<size_t>(box.face_global[local]);
+    // rho of it stays, shared by the face's classes: those this box carries
+    // are sent on in this pass, the rest waits for the boxes above.
     const FaceIn& f = in.faces[face];
-    FaceAcc& acc = shard.faces[face];
+    FaceAcc& fa = shard.faces[face];
+    double kept[3];
     for (int c = 0; c < ch; ++c) {
-      const double kept = f.rho[c] * s.power[c];
-      acc.phi_gain[c] += kept;
-      acc.gathered[c] += kept;
-      shard.absorbed[c] += s.power[c] - kept;
+      kept[c] = f.rho[c] * s.power[c];
+      fa.phi_gain[c] += kept[c];
+      shard.absorbed[c] += s.power[c] - kept[c];
     }
+    double sent_on = 0;
+    for (uint32_t k = 0; k < f.carried; ++k) {
+      const double a = in.entries[f.entry + k].alpha;
+      EntryAcc& acc = shard.entries[f.entry + k];
+      for (int c = 0; c < ch; ++c) acc.gathered[c] += kept[c] * a;
+      sent_on += a;
+    }
+    if (f.later)
+      for (int c = 0; c < ch; ++c) fa.later[c] += kept[c] * (1.0 - sent_on);
   }
 }
 
 struct SetResult {
   std::array<double, 3> absorbed{}, escaped{};
-  std::vector<BoxPassStats> boxes;
+  BoxPassStats stats;
 };
 
-// One pass over the lines of every box, interleaved (each box's parts spread
-// evenly over the pass), so that what a face receives from any box's line is
-// sent on in the same pass by the face's next carrying crossings, of any box.
-SetResult set_pass(const BoxStore& store, const LineSets& sets, RadiosityState& state, const Plan& plan, int threads,
-                   unsigned pass, Progress& progress) {
+// Adds `amount` to the pools of a face's classes from `from` on, in
+// proportion to their shares (the last takes what rounding leaves).
+void pool_classes(const LineSets& sets, size_t face, uint32_t from, int ch, int c, double amount,
+                  std::vector<double>& pooled) {
+  const uint32_t slot0 = sets.face_slot[face], end = sets.face_slot[face + 1];
+  double total = 0;
+  uint32_t last = end;
+  for (uint32_t s = slot0 + from; s < end; ++s)
+    if (sets.alpha[s] > 0) {
+      total += sets.alpha[s];
+      last = s;
+    }
+  if (last == end) last = end - 1;  // no share above: the root's class keeps it
+  double given = 0;
+  for (uint32_t s = slot0 + from; s < end; ++s) {
+    if (s != last && !(sets.alpha[s] > 0)) continue;
+    const double part = s == last ? amount - given : amount * sets.alpha[s] / total;
+    pooled[size_t{s} * ch + c] += part;
+    given += part;
+  }
+}
+
+SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, RadiosityState& state, Flight& flight,
+                   int threads, unsigned pass, Progress& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  const StoreBox& box = store.box(x);
+  const LineSetBox& lines = sets.boxes[x];
   const int ch = state.channels;
-  const size_t boxes = store.box_count(), faces = state.faces;
-  bool every_line = true;
-  for (double f : plan.fraction) every_line &= f >= 1.0;
-  PassContext in{&store, &sets, {}, {}, {}, !every_line};
-  // Unshot power takes off: a crossing of class k sends (1 / D_k) / z of it.
+  const uint32_t entries = lines.entry.back();
+  // This box's own class at every face it sees (the face's last entry) takes off now.
+  for (size_t f = 0; f + 1 < lines.entry.size(); ++f) {
+    const uint32_t slot = lines.slot[lines.entry[f + 1] - 1];
+    for (int c = 0; c < ch; ++c) {
+      flight.quota[size_t{slot} * ch + c] = state.pooled[size_t{slot} * ch + c];
+      state.pooled[size_t{slot} * ch + c] = 0;
+    }
+    flight.used[slot] = 0;
+  }
+  const std::vector<ChunkPart>& parts = flight.parts[x];
+  const bool every_line = flight.fraction[x] >= 1.0;
+  PassContext in{&box, &lines, &sets, {}, {}, x == 0, !every_line};
+  const size_t faces = box.face_global.size();
+  in.entries.resize(entries);
+  for (uint32_t e = 0; e < entries; ++e) {
+    EntryInput& input = in.entries[e];
+    const uint32_t slot = lines.slot[e];
+    for (int c = 0; c < ch; ++c) input.quota[c] = flight.quota[size_t{slot} * ch + c];
+    input.share = flight.share[slot];
+    input.expected = flight.fraction[x] * lines.carried[e] * flight.share[slot];
+    input.alpha = sets.alpha[slot];
+  }
   in.faces.resize(faces);
   for (size_t f = 0; f < faces; ++f) {
+    const size_t g = static_cast<size_t>(box.face_global[f]);
     FaceIn& face = in.faces[f];
-    for (int c = 0; c < ch; ++c) face.rho[c] = state.rho[state.at(f, c)];
-    if (!(plan.z[f] > 0)) continue;
-    face.scale = 1.0 / plan.z[f];
-    for (int c = 0; c < ch; ++c) {
-      face.quota[c] = state.unshot[state.at(f, c)];
-      state.unshot[state.at(f, c)] = 0;
-    }
+    for (int c = 0; c < ch; ++c) face.rho[c] = state.rho[state.at(g, c)];
+    face.entry = lines.entry[f];
+    face.carried = lines.entry[f + 1] - lines.entry[f];
+    face.later = face.carried < sets.face_slot[g + 1] - sets.face_slot[g];
   }
-  // Gathered power leaves by a crossing of class k with share D_min / D_k
-  // (<= 1; D_min the least D of any class, the root's), so that it leaves by
-  // each class in proportion to its crossings' weights 1 / D_k, as the quota
-  // does.
-  double most = 0;
-  for (double w : sets.weight) most = std::max(most, w);
-  in.entries.resize(boxes);
-  in.local.resize(boxes);
-  for (size_t x = 0; x < boxes; ++x) {
-    const StoreBox& box = store.box(static_cast<int>(x));
-    const LineSetBox& lines = sets.boxes[x];
-    std::vector<EntryIn>& entries = in.entries[x];
-    entries.resize(lines.slot.size());
-    in.local[x].resize(box.face_global.size());
-    for (size_t f = 0; f < box.face_global.size(); ++f) {
-      const int g = box.face_global[f];
-      in.local[x][f] = {g, lines.entry[f]};
-      for (uint32_t e = lines.entry[f]; e < lines.entry[f + 1]; ++e) {
-        const double w = sets.weight[lines.slot[e]];
-        entries[e] = {w * in.faces[g].scale, most > 0 ? std::min(1.0, w / most) : 0.0};
-      }
-    }
-  }
-  // The pass's parts, every box's spread over it by its place in the box's run.
-  struct Item {
-    int box;
-    uint64_t part;
-    double place;
-  };
-  std::vector<Item> items;
-  for (size_t x = 0; x < boxes; ++x) {
-    const uint64_t n = plan.parts[x].size();
-    for (uint64_t i = 0; i < n; ++i) items.push_back({static_cast<int>(x), i, (i + 0.5) / static_cast<double>(n)});
-  }
-  std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.place < b.place; });
-  std::vector<uint64_t> pass_lines(boxes, 0);
-  for (size_t x = 0; x < boxes; ++x) pass_lines[x] = part_lines(plan.parts[x], 0, plan.parts[x].size());
-  const int shards = static_cast<int>(std::max<size_t>(1, std::min<size_t>(threads, items.size())));
+  const uint64_t chunks = parts.size();
+  const uint64_t pass_lines = part_lines(parts, 0, chunks);
+  const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
   std::vector<SetShard> acc(shards);
   tbb::parallel_for(0, shards, [&](int s) {
     SetShard& a = acc[s];
+    a.entries.assign(entries, EntryAcc{});
     a.faces.assign(faces, FaceAcc{});
-    a.boxes.assign(boxes, BoxPassStats{});
-    const size_t lo = items.size() * s / shards, hi = items.size() * (s + 1) / shards;
-    if (in.capped) {
-      // Of a face's quota, the shard may send what its lines of each box
-      // are expected to: their part of the box's pass, times the box's part
-      // of the face's z.
-      std::vector<double> part(boxes, 0.0);
-      for (size_t i = lo; i < hi; ++i) part[items[i].box] += plan.parts[items[i].box][items[i].part].lines;
-      a.allowance.assign(faces, 0.0);
-      for (size_t x = 0; x < boxes; ++x) {
-        if (!(part[x] > 0)) continue;
-        const double share = part[x] / double(pass_lines[x]) * plan.fraction[x];
-        const LineSetBox& lines = sets.boxes[x];
-        for (size_t f = 0; f < in.local[x].size(); ++f)
-          for (uint32_t e = lines.entry[f]; e < lines.entry[f + 1]; ++e)
-            a.allowance[in.local[x][f].face] += share * lines.carried[e] * in.entries[x][e].share;
-      }
-    }
-    for (size_t i = lo; i < hi; ++i) {
-      const int x = items[i].box;
-      const StoreBox& box = store.box(x);
-      const auto start = std::chrono::steady_clock::now();
-      BoxPassStats& stats = a.boxes[x];
-      stream_pass_lines(
-          store, x, plan.parts[x], items[i].part, items[i].part + 1, pass, progress,
-          [&](const linestore::DecodedChunk& chunk, uint64_t c) { check_chunk(box, chunk, x, c); },
-          [&](const linestore::DecodedChunk& chunk, uint32_t l) {
-            const Event* ev = chunk.events.data() + chunk.first[l];
-            const int m = static_cast<int>(chunk.first[l + 1] - chunk.first[l]);
-            ++stats.lines;
-            stats.hits += m;
-            (ch == 1 ? transport_set_line<1> : transport_set_line<3>)(in, x, ev, m, a);
-          },
-          &a.buffers);
-      stats.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
+    const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
+    a.allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
+    stream_pass_lines(
+        store, x, parts, lo, hi, pass, progress,
+        [&](const linestore::DecodedChunk& chunk, uint64_t c) { check_chunk(box, chunk, x, c); },
+        [&](const linestore::DecodedChunk& chunk, uint32_t l) {
+          const Event* ev = chunk.events.data() + chunk.first[l];
+          const int m = static_cast<int>(chunk.first[l + 1] - chunk.first[l]);
+          (ch == 1 ? transport_set_line<1> : transport_set_line<3>)(in, ev, m, a);
+        });
   });
-  // Merge in shard order: what the quota did not send (lines lost to damage;
-  // rounding) and what was gathered and not sent on are unshot again.
+  // Merge in shard order: the quota sent, what each class gathered and did
+  // not send (back to its pool), what waits for the boxes above.
   SetResult result;
-  result.boxes.assign(boxes, BoxPassStats{});
   for (size_t f = 0; f < faces; ++f) {
-    double used = 0;
-    for (const SetShard& a : acc) used += a.faces[f].used;
-    for (int c = 0; c < ch; ++c) {
-      double back = in.faces[f].quota[c] * (1.0 - used);
+    const size_t g = static_cast<size_t>(box.face_global[f]);
+    const FaceIn& face = in.faces[f];
+    for (uint32_t k = 0; k < face.carried; ++k) {
+      const uint32_t e = face.entry + k, slot = lines.slot[e];
       for (const SetShard& a : acc) {
-        back += a.faces[f].gathered[c];
-        state.phi[state.at(f, c)] += a.faces[f].phi_gain[c];
+        flight.used[slot] += a.entries[e].used;
+        for (int c = 0; c < ch; ++c) state.pooled[size_t{slot} * ch + c] += a.entries[e].gathered[c];
       }
-      state.unshot[state.at(f, c)] += back;
+    }
+    for (int c = 0; c < ch; ++c) {
+      double later = 0;
+      for (const SetShard& a : acc) {
+        state.phi[state.at(g, c)] += a.faces[f].phi_gain[c];
+        later += a.faces[f].later[c];
+      }
+      if (later != 0) pool_classes(sets, g, face.carried, ch, c, later, state.pooled);
     }
   }
   for (const SetShard& a : acc) {
@@ -392,73 +376,100 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, RadiosityState& 
       result.absorbed[c] += a.absorbed[c];
       result.escaped[c] += a.escaped[c];
     }
-    for (size_t x = 0; x < boxes; ++x) {
-      result.boxes[x].lines += a.boxes[x].lines;
-      result.boxes[x].hits += a.boxes[x].hits;
-      result.boxes[x].seconds += a.boxes[x].seconds;
-    }
+    result.stats.lines += a.lines;
+    result.stats.hits += a.hits;
   }
+  result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 
-// Which lines each box takes this iteration: all, or (an adaptive pass) as
-// many as carry about `power_per_line` each, at least the box's coverage;
-// and each face's z over the lines taken.
-Plan plan_iteration(const BoxStore& store, const LineSets& sets, const RadiosityState& state, double power_per_line,
-                    unsigned pass) {
-  const size_t boxes = store.box_count();
-  Plan plan;
-  plan.fraction.assign(boxes, 1.0);
-  plan.parts.assign(boxes, {});
-  const double power = state.unshot_total();
-  for (size_t x = 0; x < boxes; ++x) {
-    const StoreBox& box = store.box(static_cast<int>(x));
-    if (power_per_line > 0 && box.lines > 0)
-      plan.fraction[x] = std::clamp(power / (power_per_line * static_cast<double>(store.lines())), box.coverage, 1.0);
-    plan.parts[x] = pass_parts(store, static_cast<int>(x), plan.fraction[x], pass);
-    if (plan.fraction[x] < 1.0 && box.lines > 0) {
-      uint64_t lines = 0;
-      for (const ChunkPart& p : plan.parts[x]) lines += p.lines;
-      plan.fraction[x] = static_cast<double>(lines) / static_cast<double>(box.lines);
-    }
-  }
-  plan.z.assign(state.faces, 0.0);
+// New unshot power (the first shot's, local lines') goes to the pools of its
+// face's classes in proportion to their shares; uncarried faces keep theirs.
+void assign_unshot(const LineSets& sets, RadiosityState& state) {
+  const int ch = state.channels;
   std::vector<bool> uncarried(state.faces, false);
   for (int f : sets.uncarried) uncarried[f] = true;
-  for (size_t x = 0; x < boxes; ++x) {
-    const StoreBox& box = store.box(static_cast<int>(x));
-    const LineSetBox& lines = sets.boxes[x];
-    for (size_t f = 0; f < box.face_global.size(); ++f)
-      for (uint32_t e = lines.entry[f]; e < lines.entry[f + 1]; ++e)
-        plan.z[box.face_global[f]] += plan.fraction[x] * lines.carried[e] * sets.weight[lines.slot[e]];
+  for (size_t f = 0; f < state.faces; ++f) {
+    if (uncarried[f]) continue;
+    for (int c = 0; c < ch; ++c) {
+      double& u = state.unshot[state.at(f, c)];
+      if (u == 0) continue;
+      pool_classes(sets, f, 0, ch, c, u, state.pooled);
+      u = 0;
+    }
   }
-  for (size_t f = 0; f < state.faces; ++f)
-    if (uncarried[f]) plan.z[f] = 0;
-  return plan;
 }
 
 }  // namespace
+
+// Which lines each box takes this iteration, and what one carrying crossing
+// of a class sends: 1 / (the carriers' crossings this iteration takes).
+void plan_iteration(const BoxStore& store, const LineSets& sets, const RadiosityState& state, double power_per_line,
+                    unsigned pass, Flight& flight) {
+  const size_t boxes = store.box_count();
+  flight.fraction.assign(boxes, 1.0);
+  flight.parts.assign(boxes, {});
+  double power = 0;
+  for (double p : state.pooled) power += p;
+  for (size_t x = 0; x < boxes; ++x) {
+    const StoreBox& box = store.box(static_cast<int>(x));
+    if (power_per_line > 0 && box.lines > 0)
+      flight.fraction[x] = std::clamp(power / (power_per_line * static_cast<double>(store.lines())), box.coverage, 1.0);
+    flight.parts[x] = pass_parts(store, static_cast<int>(x), flight.fraction[x], pass);
+    if (flight.fraction[x] < 1.0 && box.lines > 0) {
+      uint64_t lines = 0;
+      for (const ChunkPart& p : flight.parts[x]) lines += p.lines;
+      flight.fraction[x] = static_cast<double>(lines) / static_cast<double>(box.lines);
+    }
+  }
+  std::vector<double> taken(sets.slots(), 0.0);
+  for (size_t x = 0; x < boxes; ++x) {
+    const LineSetBox& lines = sets.boxes[x];
+    for (size_t e = 0; e < lines.slot.size(); ++e) taken[lines.slot[e]] += flight.fraction[x] * lines.carried[e];
+  }
+  flight.share.assign(sets.slots(), 0.0);
+  for (size_t s = 0; s < sets.slots(); ++s) flight.share[s] = taken[s] > 0 ? 1.0 / taken[s] : 0.0;
+}
 
 PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, const LineSets& sets,
                              RadiosityState& state, unsigned pass, int threads, double power_per_line,
                              unsigned long long seed, std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines) {
   const auto start = std::chrono::steady_clock::now();
+  const Hierarchy& h = store.hierarchy();
   const int ch = state.channels;
-  const Plan plan = plan_iteration(store, sets, state, power_per_line, pass);
+  assign_unshot(sets, state);
+  Flight flight;
+  flight.quota.assign(sets.slots() * ch, 0.0);
+  flight.used.assign(sets.slots(), 0.0);
+  plan_iteration(store, sets, state, power_per_line, pass, flight);
+  // Deepest boxes first, the root last. Boxes of one depth hold disjoint
+  // faces and run in parallel.
+  std::vector<std::vector<int>> at_depth(h.max_depth() + 1);
+  for (int b : h.depth_order) at_depth[h.boxes[b].depth].push_back(b);
   Progress progress(fmt::format("iteration {}", pass), store.lines(), "lines", true);
-  const SetResult result = set_pass(store, sets, state, plan, threads, pass, progress);
-  progress.finish();
-  for (int c = 0; c < ch; ++c) {
-    state.energy.absorbed[c] += result.absorbed[c];
-    state.energy.escaped[c] += result.escaped[c];
-  }
   PassStats stats;
   stats.pass = static_cast<int>(pass);
-  for (const BoxPassStats& b : result.boxes) {
-    stats.lines += b.lines;
-    stats.hits += b.hits;
+  if (per_box) per_box->assign(h.boxes.size(), BoxPassStats{});
+  for (int d = h.max_depth(); d >= 0; --d) {
+    const std::vector<int>& boxes = at_depth[d];
+    std::vector<SetResult> results(boxes.size());
+    tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t k) {
+      results[k] = set_pass(store, sets, boxes[k], state, flight, threads, pass, progress);
+    });
+    for (size_t k = 0; k < boxes.size(); ++k) {
+      for (int c = 0; c < ch; ++c) {
+        state.energy.absorbed[c] += results[k].absorbed[c];
+        state.energy.escaped[c] += results[k].escaped[c];
+      }
+      stats.lines += results[k].stats.lines;
+      stats.hits += results[k].stats.hits;
+      if (per_box) (*per_box)[boxes[k]] = results[k].stats;
+    }
   }
-  if (per_box) *per_box = result.boxes;
+  progress.finish();
+  // What no crossing took (a class whose carriers lost lines to damage; rounding) goes back to its pool.
+  for (size_t s = 0; s < sets.slots(); ++s)
+    for (int c = 0; c < ch; ++c) state.pooled[s * ch + c] += flight.quota[s * ch + c] * (1.0 - flight.used[s]);
   std::vector<int> waiting;
   for (int f : sets.uncarried)
     for (int c = 0; c < ch; ++c)

@@ -30,12 +30,14 @@ RadiosityState make_state(const Scene& scene, const PatchMesh& mesh) {
 double RadiosityState::unshot_total() const {
   double sum = 0;
   for (double u : unshot) sum += u;
+  for (double u : pooled) sum += u;
   return sum;
 }
 
 std::array<double, 3> RadiosityState::unshot_per_channel() const {
   std::array<double, 3> sum{};
   for (size_t i = 0; i < unshot.size(); ++i) sum[i % channels] += unshot[i];
+  for (size_t i = 0; i < pooled.size(); ++i) sum[i % channels] += pooled[i];
   return sum;
 }
 

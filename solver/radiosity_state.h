@@ -27,10 +27,15 @@ struct RadiosityState {
   // Power held in the ARs of subscene walls (docs/method.md, 7): entering
   // a box (In) and leaving it (Out), AR * channels, W; empty without subscenes.
   std::vector<double> ar_in, ar_out;
+  // hierarchy.transport = "lines": unshot power already assigned to one of
+  // the line sets (boxes) that carry a face's power, slot * channels, W
+  // (docs/algorithm.md, "Line-set transport"); `unshot` holds what is not
+  // assigned yet. Empty for the other transports.
+  std::vector<double> pooled;
   EnergyTotals energy;
 
   size_t at(size_t face, int c) const { return face * channels + c; }
-  // Unshot power, summed over channels.
+  // Unshot power, assigned or not, summed over channels.
   double unshot_total() const;
   // And per channel.
   std::array<double, 3> unshot_per_channel() const;
