@@ -297,16 +297,17 @@ void BoxFileReader::read_frame(uint64_t offset, uint64_t bytes, uint64_t raw_byt
   in_.read(compressed_.data(), static_cast<std::streamsize>(bytes));
   if (!in_) fail(fmt::format("{}: truncated", what));
   raw.resize(raw_bytes);  // keeps its memory from chunk to chunk
-  if (!dctx_) dctx_ = ZSTD_createDCtx();
-  const size_t n = ZSTD_decompressDCtx(static_cast<ZSTD_DCtx*>(dctx_), raw.data(), raw.size(), compressed_.data(),
+  if (!dctx_) dctx_.reset(ZSTD_createDCtx());
+  if (!dctx_) fail("out of memory for a zstd context");
+  const size_t n = ZSTD_decompressDCtx(static_cast<ZSTD_DCtx*>(dctx_.get()), raw.data(), raw.size(), compressed_.data(),
                                        compressed_.size());
   if (ZSTD_isError(n)) fail(fmt::format("{}: corrupted ({})", what, ZSTD_getErrorName(n)));
   if (n != raw_bytes) fail(fmt::format("{}: corrupted (size {} instead of {})", what, n, raw_bytes));
 }
 
-BoxFileReader::~BoxFileReader() {
-  if (dctx_) ZSTD_freeDCtx(static_cast<ZSTD_DCtx*>(dctx_));
-}
+void BoxFileReader::FreeDctx::operator()(void* dctx) const { ZSTD_freeDCtx(static_cast<ZSTD_DCtx*>(dctx)); }
+
+BoxFileReader::~BoxFileReader() = default;
 
 void BoxFileReader::read_chunk(size_t index, DecodedChunk& out) {
   const ChunkInfo& c = chunks_.at(index);

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,7 +15,7 @@
 
 namespace mpath::linestore {
 
-inline constexpr uint32_t kFormatVersion = 2;
+inline constexpr uint32_t kFormatVersion = 3;  // 3: manifest file hashes by block_hash
 
 // What a box file's lines tell about its box, besides the lines themselves
 // (docs/method.md, 6), all counted from the file's lines.
@@ -107,7 +108,11 @@ class BoxFileReader {
   std::vector<ChunkInfo> chunks_;
   BoxCounts counts_;
   std::string compressed_, raw_;
-  void* dctx_ = nullptr;  // zstd decompression context, made at the first chunk
+  struct FreeDctx {
+    void operator()(void* dctx) const;
+  };
+  // zstd decompression context, made at the first frame (freed also when the constructor throws).
+  std::unique_ptr<void, FreeDctx> dctx_;
 };
 
 }  // namespace mpath::linestore

@@ -20,7 +20,7 @@ struct StoreFile {
   uint64_t events = 0;
   uint64_t chunks = 0;
   uint64_t bytes = 0;
-  std::string hash;  // FNV-1a 64 of the whole file
+  std::string hash;  // hash_file (util/hash.h) of the whole file
 };
 
 // One box of the hierarchy as the store records it (the solver rebuilds the

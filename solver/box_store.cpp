@@ -1,5 +1,6 @@
 #include "box_store.h"
 
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "line_sets.h"
@@ -9,6 +10,8 @@
 #include <map>
 
 #include "error.h"
+#include "hash.h"
+#include "progress.h"
 #include "store_identity.h"
 
 namespace mpath {
@@ -178,6 +181,7 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
   manifest_ = linestore::read_manifest(manifest_path);
   check_against(options, mesh, manifest_path);
   lay_out_boxes(mesh);
+  verify_files(options.store.dir, manifest_path);
   open_files(options.store.dir, manifest_path);
   for (size_t b = 0; b < boxes_.size(); ++b) derive_box_data(mesh, b);
   if (hierarchy_.transparent)
@@ -232,6 +236,38 @@ void BoxStore::lay_out_boxes(const PatchMesh& mesh) {
     }
     box.counts.resize(sb.patches.size(), sb.ar_count(), offset);
   }
+}
+
+void BoxStore::verify_files(const fs::path& dir, const fs::path& manifest_path) const {
+  uint64_t bytes = 0;
+  for (const linestore::StoreFile& f : manifest_.files) {
+    const fs::path name(f.name);
+    if (name.empty() || name != name.filename() || f.name == "." || f.name == "..")
+      throw InputError(fmt::format("{}: lists \"{}\", not a file name in the store's folder (damaged manifest); run "
+                                   "mpath-preprocess again", manifest_path.string(), f.name));
+    const fs::path path = dir / name;
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+      throw InputError(fmt::format("{}: missing (listed in {})", path.string(), manifest_path.string()));
+    const uint64_t size = fs::file_size(path, ec);
+    if (ec || size != f.bytes)
+      throw InputError(fmt::format("{}: {} bytes, the manifest says {} (truncated or from another run)", path.string(),
+                                   size, f.bytes));
+    bytes += size;
+  }
+  // The whole store is read once and hashed, in parallel, before any work:
+  // damage or a file of another store of the same size is found now, not in
+  // the middle of an iteration.
+  Progress progress("checking store", bytes, "bytes", true);
+  tbb::parallel_for(size_t{0}, manifest_.files.size(), [&](size_t i) {
+    const linestore::StoreFile& f = manifest_.files[i];
+    const fs::path path = dir / f.name;
+    if (hash_file(path) != f.hash)
+      throw InputError(fmt::format("{}: its contents do not match the hash in {} (damaged, or a file of another "
+                                   "store); run mpath-preprocess again", path.string(), manifest_path.string()));
+    progress.advance(f.bytes);
+  });
+  progress.finish();
 }
 
 void BoxStore::open_files(const fs::path& dir, const fs::path& manifest_path) {

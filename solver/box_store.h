@@ -89,6 +89,8 @@ class BoxStore {
   // against the manifest, its counts summed; what the passes derive from them.
   void check_against(const Options& options, const PatchMesh& mesh, const std::filesystem::path& manifest_path);
   void lay_out_boxes(const PatchMesh& mesh);
+  // Every file the manifest lists: a plain name, its size and its hash as recorded (before any work).
+  void verify_files(const std::filesystem::path& dir, const std::filesystem::path& manifest_path) const;
   void open_files(const std::filesystem::path& dir, const std::filesystem::path& manifest_path);
   void derive_box_data(const PatchMesh& mesh, size_t b);
   uint64_t total(uint64_t StoreBox::*field) const;

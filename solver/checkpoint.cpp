@@ -1,5 +1,6 @@
 #include "checkpoint.h"
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 
@@ -12,22 +13,50 @@ namespace mpath {
 
 namespace {
 
-constexpr char kMagic[8] = {'M', 'P', 'C', 'K', 'P', 'T', '2', '\0'};
+// 3: the StreamHash of everything before it ends the file.
+constexpr char kMagic[8] = {'M', 'P', 'C', 'K', 'P', 'T', '3', '\0'};
 
-template <typename T>
-void put(std::ostream& out, const T& v) {
-  out.write(reinterpret_cast<const char*>(&v), sizeof(T));
-}
+class Writer {
+ public:
+  explicit Writer(std::ostream& out) : out_(out) {}
+  void bytes(const void* data, size_t n) {
+    out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(n));
+    h_.add(data, n);
+  }
+  template <typename T>
+  void put(const T& v) {
+    bytes(&v, sizeof(T));
+  }
+  void put_doubles(const std::vector<double>& v) {
+    put<uint64_t>(v.size());
+    bytes(v.data(), v.size() * sizeof(double));
+  }
+  void finish() {
+    const uint64_t v = h_.value();
+    out_.write(reinterpret_cast<const char*>(&v), sizeof v);
+  }
 
-void put_doubles(std::ostream& out, const std::vector<double>& v) {
-  put<uint64_t>(out, v.size());
-  out.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(double)));
-}
+ private:
+  std::ostream& out_;
+  StreamHash h_;
+};
 
 class Reader {
  public:
-  Reader(const std::filesystem::path& path) : path_(path), in_(path, std::ios::binary) {
+  // The whole file is checked against its hash before anything is read.
+  Reader(const std::filesystem::path& path) : path_(path) {
+    std::error_code ec;
+    const uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(fmt::format("{}: cannot read checkpoint", path.string()));
+    if (size < sizeof(kMagic) + sizeof(uint64_t)) fail("truncated");
+    in_.open(path, std::ios::binary);
     if (!in_) throw InputError(fmt::format("{}: cannot read checkpoint", path.string()));
+    uint64_t stored = 0;
+    in_.seekg(static_cast<std::streamoff>(size - sizeof stored));
+    if (!in_.read(reinterpret_cast<char*>(&stored), sizeof stored)) fail("truncated");
+    if (hex64(stored) != hash_file(path, size - sizeof stored)) fail("checksum mismatch");
+    end_ = size - sizeof stored;
+    in_.seekg(0);
   }
   template <typename T>
   T get() {
@@ -41,9 +70,14 @@ class Reader {
     if (!in_.read(reinterpret_cast<char*>(v.data()), static_cast<std::streamsize>(expected * sizeof(double)))) fail("truncated");
   }
   std::string get_string(size_t n) {
+    if (n > end_) fail("implausible length");
     std::string s(n, '\0');
     if (!in_.read(s.data(), static_cast<std::streamsize>(n))) fail("truncated");
     return s;
+  }
+  // Everything up to the hash was read.
+  void finish() {
+    if (static_cast<uint64_t>(in_.tellg()) != end_) fail("its parts do not add up to its size");
   }
   [[noreturn]] void fail(const std::string& what) const {
     throw InputError(fmt::format("{}: damaged checkpoint ({}); run without --resume", path_.string(), what));
@@ -52,6 +86,7 @@ class Reader {
  private:
   std::filesystem::path path_;
   std::ifstream in_;
+  uint64_t end_ = 0;
 };
 
 }  // namespace
@@ -79,32 +114,36 @@ std::string checkpoint_key(const Options& options, const PatchMesh& mesh, int th
 void write_checkpoint(const std::filesystem::path& path, const std::string& key, const RadiosityState& state,
                       const IterationLog& log) {
   AtomicFile file(path);
-  std::ostream& out = file.stream();
-  out.write(kMagic, sizeof kMagic);
-  put<uint64_t>(out, key.size());
-  out << key;
-  put<uint32_t>(out, static_cast<uint32_t>(state.channels));
-  put_doubles(out, state.phi);
-  put_doubles(out, state.unshot);
-  put_doubles(out, state.ar_in);
-  put_doubles(out, state.ar_out);
-  put_doubles(out, state.pooled);
+  Writer out(file.stream());
+  out.bytes(kMagic, sizeof kMagic);
+  out.put<uint64_t>(key.size());
+  out.bytes(key.data(), key.size());
+  out.put<uint32_t>(static_cast<uint32_t>(state.channels));
+  out.put_doubles(state.phi);
+  out.put_doubles(state.unshot);
+  out.put_doubles(state.ar_in);
+  out.put_doubles(state.ar_out);
+  out.put_doubles(state.pooled);
   for (const auto* a : {&state.energy.emitted, &state.energy.absorbed, &state.energy.escaped})
-    for (double v : *a) put(out, v);
-  put(out, log.first_unshot);
-  put<uint64_t>(out, log.passes.size());
+    for (double v : *a) out.put(v);
+  out.put(log.first_unshot);
+  out.put<uint64_t>(log.passes.size());
   for (const PassStats& p : log.passes) {
-    put<int32_t>(out, p.pass);
-    put(out, p.lines);
-    put(out, p.hits);
-    put(out, p.seconds);
-    put(out, p.unshot_fraction);
+    out.put<int32_t>(p.pass);
+    out.put(p.lines);
+    out.put(p.hits);
+    out.put(p.seconds);
+    out.put(p.unshot_fraction);
   }
+  out.finish();
   file.commit();
 }
 
-void read_checkpoint(const std::filesystem::path& path, const std::string& key, RadiosityState& state,
-                     IterationLog& log) {
+void read_checkpoint(const std::filesystem::path& path, const std::string& key, RadiosityState& into,
+                     IterationLog& into_log) {
+  // Read into copies: the state is replaced only once the whole file checked out.
+  RadiosityState state = into;
+  IterationLog log = into_log;
   Reader in(path);
   if (in.get_string(sizeof kMagic) != std::string(kMagic, sizeof kMagic)) in.fail("not an mpath checkpoint");
   const auto key_bytes = in.get<uint64_t>();
@@ -138,6 +177,11 @@ void read_checkpoint(const std::filesystem::path& path, const std::string& key, 
     log.lines += p.lines;
     log.hits += p.hits;
   }
+  in.finish();
+  for (double v : state.phi)
+    if (!std::isfinite(v)) in.fail("a non-finite radiosity");
+  into = std::move(state);
+  into_log = std::move(log);
 }
 
 }  // namespace mpath

@@ -284,7 +284,7 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
   const uint64_t pass_lines = part_lines(in.parts, 0, chunks);
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
   std::vector<BoxShard> acc(shards);
-  tbb::parallel_for(0, shards, [&](int s) {
+  for_each_shard(shards, [&](int s) {
     BoxShard& a = acc[s];
     a.faces.reset(in.faces.size());
     a.wall_out.assign(size_t{in.wall_ars} * ch, 0.0);
@@ -441,7 +441,7 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<i
   const int shards = std::max(1, std::min<int>(threads, static_cast<int>(faces.size())));
   std::vector<ShardAccumulator> acc(shards);
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
-  tbb::parallel_for(0, shards, [&](int s) {
+  for_each_shard(shards, [&](int s) {
     ShardAccumulator& a = acc[s];
     a.reset(state.faces);
     for (size_t i = faces.size() * s / shards; i < faces.size() * (s + 1) / shards; ++i) {

@@ -47,7 +47,7 @@ void count_box(const BoxStore& store, LineSets& sets, int x, int threads, SlotCo
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
   const size_t slots = sets.slots();
   std::vector<SlotCounts> part(shards);
-  tbb::parallel_for(0, shards, [&](int s) {
+  for_each_shard(shards, [&](int s) {
     SlotCounts& p = part[s];
     for (auto* v : {&p.crossings, &p.carriers}) v->assign(slots, 0.0);
     p.entries.assign(lines.slot.size(), 0.0);
@@ -334,7 +334,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
   std::vector<SetShard> acc(shards);
-  tbb::parallel_for(0, shards, [&](int s) {
+  for_each_shard(shards, [&](int s) {
     SetShard& a = acc[s];
     a.entries.assign(entries, EntryAcc{});
     a.faces.assign(faces, FaceAcc{});
