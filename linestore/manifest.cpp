@@ -37,38 +37,53 @@ Manifest read_manifest(const fs::path& path) {
     throw InputError(fmt::format("{}: missing; run mpath-preprocess with this config first", path.string()));
   std::ifstream in(path);
   json j;
+  // Counts must be whole numbers in range: a float or a negative number in
+  // their place is damage (and no cast is made of a value that does not fit).
+  const auto whole = [&](const json& v, const char* key, double most) {
+    const json& x = v.at(key);
+    if (!x.is_number_integer() || (x.is_number_unsigned() ? double(x.get<uint64_t>()) > most : x.get<int64_t>() < -1 ||
+                                                                                                    double(x.get<int64_t>()) > most))
+      throw json::type_error::create(302, fmt::format("'{}' is not a whole number in range", key), &x);
+    return x;
+  };
+  const auto count = [&](const json& v, const char* key) {
+    const json x = whole(v, key, 1.8e19);
+    if (!x.is_number_unsigned()) throw json::type_error::create(302, fmt::format("'{}' is negative", key), &x);
+    return x.get<uint64_t>();
+  };
+  const auto small = [&](const json& v, const char* key) { return static_cast<int>(whole(v, key, 2e9).get<int64_t>()); };
   try {
     j = json::parse(in);
     Manifest m;
-    m.format_version = j.at("format_version").get<uint32_t>();
+    m.format_version = static_cast<uint32_t>(small(j, "format_version"));
     if (m.format_version != kFormatVersion)
       throw InputError(fmt::format("{}: store format version {} (this mpath reads version {}); re-run mpath-preprocess",
                                    path.string(), m.format_version, kFormatVersion));
     m.mpath_version = j.at("mpath_version").get<std::string>();
     m.identity = j.at("identity").get<std::map<std::string, std::string>>();
-    m.patches = j.at("patches").get<uint64_t>();
-    m.faces = j.at("faces").get<uint64_t>();
-    m.lines_total = j.at("lines_total").get<uint64_t>();
-    m.chunk_lines = j.at("chunk_lines").get<uint64_t>();
+    m.patches = count(j, "patches");
+    m.faces = count(j, "faces");
+    m.lines_total = count(j, "lines_total");
+    m.chunk_lines = count(j, "chunk_lines");
     for (const json& b : j.at("boxes")) {
       BoxEntry e;
-      e.parent = b.at("parent").get<int>();
-      e.depth = b.at("depth").get<int>();
+      e.parent = small(b, "parent");
+      e.depth = small(b, "depth");
       for (int i = 0; i < 3; ++i) {
         e.lo[i] = b.at("lo").at(i).get<double>();
         e.hi[i] = b.at("hi").at(i).get<double>();
       }
-      e.lines = b.at("lines").get<uint64_t>();
-      e.patches = b.at("patches").get<uint64_t>();
-      e.ars = b.at("ars").get<uint64_t>();
-      e.objects = b.at("objects").get<uint64_t>();
+      e.lines = count(b, "lines");
+      e.patches = count(b, "patches");
+      e.ars = count(b, "ars");
+      e.objects = count(b, "objects");
       e.quotient = b.at("quotient").get<double>();
       m.boxes.push_back(e);
     }
     for (const json& f : j.at("files"))
-      m.files.push_back({f.at("name").get<std::string>(), f.at("box").get<uint32_t>(), f.at("first_line").get<uint64_t>(),
-                         f.at("lines").get<uint64_t>(), f.at("events").get<uint64_t>(), f.at("chunks").get<uint64_t>(),
-                         f.at("bytes").get<uint64_t>(), f.at("hash").get<std::string>()});
+      m.files.push_back({f.at("name").get<std::string>(), static_cast<uint32_t>(small(f, "box")), count(f, "first_line"),
+                         count(f, "lines"), count(f, "events"), count(f, "chunks"),
+                         count(f, "bytes"), f.at("hash").get<std::string>()});
     return m;
   } catch (const json::exception& e) {
     throw InputError(fmt::format("{}: malformed manifest: {}", path.string(), e.what()));

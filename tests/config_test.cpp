@@ -64,6 +64,10 @@ TEST(Config, OutOfRangeAndUnknownChoicesAreRejected) {
   EXPECT_NE(error_of(dir / "run.toml", {"lines.root_fraction=1.5"}).find("lines.root_fraction"), std::string::npos);
   EXPECT_NE(error_of(dir / "run.toml", {"solver.method=magic"}).find("unknown method 'magic'"), std::string::npos);
   EXPECT_NE(error_of(dir / "run.toml", {"lines.total=0"}).find("positive"), std::string::npos);
+  // Values above a limit are errors, not clamped.
+  EXPECT_NE(error_of(dir / "run.toml", {"lines.total=2000000000000"}).find("at most 1000000000000"), std::string::npos);
+  EXPECT_NE(error_of(dir / "run.toml", {"first_shot.lines=9000000000000000000"}).find("at most"), std::string::npos);
+  EXPECT_NE(error_of(dir / "run.toml", {"solver.iterations=200000"}).find("at most 100000 (got 200000)"), std::string::npos);
   EXPECT_NE(error_of(dir / "run.toml", {"hierarchy.vp_grid=3"}).find("power of two"), std::string::npos);
   EXPECT_NE(error_of(dir / "run.toml", {"no_equals_sign"}).find("expected key=value"), std::string::npos);
   EXPECT_NE(error_of(dir / "run.toml", {"solver.bogus=1"}).find("command line: unknown config key 'solver.bogus'"),

@@ -216,6 +216,23 @@ TEST(Manifest, RoundTripsAndNamesTheFirstMismatch) {
   EXPECT_EQ(identity_mismatch(other, back.identity), "lines.total: the store was made with 1000, this run has 2000");
   test::write_file(dir / "bad.json", "{\"format_version\": 1");
   EXPECT_THROW(read_manifest(dir / "bad.json"), InputError);
+  // A count that is a float, negative or too large is damage, refused by name
+  // (found by fuzz/fuzz_manifest: a float was cast to an integer).
+  const std::string text = test::read_file(dir / "manifest.json");
+  for (const std::string& bad : {std::string("8.4e30"), std::string("-5"), std::string("1.5")}) {
+    std::string damaged = text;
+    const size_t at = damaged.find("\"lines_total\":");
+    ASSERT_NE(at, std::string::npos);
+    const size_t from = at + std::string("\"lines_total\":").size();
+    damaged.replace(from, damaged.find_first_of(",}", from) - from, bad);
+    test::write_file(dir / "damaged.json", damaged);
+    try {
+      read_manifest(dir / "damaged.json");
+      ADD_FAILURE() << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("'lines_total' is"), std::string::npos) << e.what();
+    }
+  }
   try {
     read_manifest(dir / "none.json");
     FAIL();

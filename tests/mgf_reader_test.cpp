@@ -153,6 +153,22 @@ std::string mgf_error(const std::string& text) {
   return "";
 }
 
+// Files that include the next one twice: 2^20 reads from 21 small files,
+// refused once 100,000 files have been read, in well under a second.
+TEST(MgfReader, BoundsIncludesThatFanOut) {
+  TempDir dir;
+  const int files = 21;
+  for (int k = 0; k < files - 1; ++k)
+    write_file(dir / fmt::format("f{}.mgf", k), fmt::format("i f{}.mgf\ni f{}.mgf\n", k + 1, k + 1));
+  write_file(dir / fmt::format("f{}.mgf", files - 1), "# a leaf\n");
+  try {
+    read_mgf(dir / "f0.mgf", 8, 1, nullptr);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("more than 100000 files read through 'i'"), std::string::npos) << e.what();
+  }
+}
+
 TEST(MgfReader, NamesFileLineAndCauseOfBadInput) {
   EXPECT_NE(mgf_error("# x\nblah 1 2\n").find("e.mgf:2: unknown MGF entity 'blah'"), std::string::npos);
   EXPECT_NE(mgf_error("f a b c\n").find("e.mgf:1: undefined vertex 'a'"), std::string::npos);
@@ -164,6 +180,14 @@ TEST(MgfReader, NamesFileLineAndCauseOfBadInput) {
   EXPECT_NE(mgf_error("m x =\nrd 1.5\nv a =\np 0 0 0\nv b =\np 1 0 0\nv c =\np 0 1 0\nf a b c\n").find("outside [0, 1)"),
             std::string::npos);
   EXPECT_NE(mgf_error("c x =\ncxy 0.8 0.5\n").find("outside the CIE diagram"), std::string::npos);
+  EXPECT_NE(mgf_error("xf -i 1e12 -t 1 0 0\nxf\n").find("e.mgf:1: '-i 1e12': the count must be a whole number"),
+            std::string::npos);
+  // Colours that have none (found by fuzz/fuzz_mgf: an empty range divided by zero).
+  EXPECT_NE(mgf_error("c x =\ncspec 400 400 1 2 3\n").find("e.mgf:2: 'cspec' range 400 to 400 nm"), std::string::npos);
+  EXPECT_NE(mgf_error("c x =\ncspec 900 1000 1 2\n").find("outside the visible"), std::string::npos);
+  EXPECT_NE(mgf_error("c x =\ncspec 400 700 0 0 0\n").find("'cspec' has no energy"), std::string::npos);
+  EXPECT_NE(mgf_error("c x =\ncspec 400 700 1 -2\n").find("'cspec' value -2 is negative"), std::string::npos);
+  EXPECT_NE(mgf_error("c x =\ncct 0\n").find("e.mgf:2: 'cct 0': a colour temperature must be"), std::string::npos);
   // Nested arrays of 1e5 copies each: refused at once, not run out of memory on.
   EXPECT_NE(mgf_error("v a =\np 0 0 0\nxf -a 100000 -t 1 0 0\nxf -a 100000 -t 0 1 0\nsph a 1\nxf\nxf\n")
                 .find("e.mgf:4: nested 'xf -a' arrays make 1e+10 copies"),

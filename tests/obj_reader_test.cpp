@@ -123,5 +123,40 @@ TEST(SceneLoader, RejectsUnknownFormatsMissingFilesAndDarkScenes) {
   }
 }
 
+std::string load_error(const std::filesystem::path& file) {
+  SceneOptions o;
+  o.file = file;
+  o.emitters["light"] = {1, 1, 1};
+  std::vector<std::string> w;
+  try {
+    load_scene(o, 16, w);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A device or a pipe named as the scene is refused at once (reading
+// /dev/zero would never end), and scenes beyond what single-precision
+// tracing resolves are refused with the reason.
+TEST(SceneLoader, RefusesDevicesPipesAndScenesFloatsCannotResolve) {
+  TempDir dir;
+  std::filesystem::create_symlink("/dev/zero", dir / "zero.obj");
+  EXPECT_NE(load_error(dir / "zero.obj").find("not a regular file"), std::string::npos);
+  ASSERT_EQ(test::run("mkfifo " + (dir / "pipe.mgf").string()).exit_code, 0);
+  EXPECT_NE(load_error(dir / "pipe.mgf").find("not a regular file"), std::string::npos);
+  const auto scene = [&](const std::string& name, double scale) {
+    write_file(dir / (name + ".mtl"), "newmtl light\nKd 0.5 0.5 0.5\n");
+    write_file(dir / (name + ".obj"), fmt::format("mtllib {}.mtl\nusemtl light\nv 0 0 0\nv {} 0 0\nv 0 {} 0\nf 1 2 3\n",
+                                                   name, scale, scale));
+    return dir / (name + ".obj");
+  };
+  EXPECT_EQ(load_error(scene("metre", 1.0)), "");
+  EXPECT_NE(load_error(scene("huge", 1e18)).find("beyond 10000000 m, more than single-precision tracing can resolve"),
+            std::string::npos);
+  EXPECT_NE(load_error(scene("tiny", 1e-9)).find("mpath solves scenes from 1e-05 m to 10000000 m across"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace mpath

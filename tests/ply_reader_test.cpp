@@ -149,6 +149,33 @@ TEST(PlyReader, ReportsTruncatedAndMalformedFiles) {
   }
   write_file(dir / "n.ply", "solid x\n");
   EXPECT_THROW(read_ply(dir / "n.ply"), InputError);
+  // Counts a small file cannot hold end at once, not after minutes of looping
+  // (found by fuzz/fuzz_ply): one past the integers, one beyond the file.
+  const auto error_of = [&](const std::string& name, const std::string& text) {
+    write_file(dir / name, text);
+    try {
+      read_ply(dir / name);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string header = "ply\nformat binary_little_endian 1.0\n";
+  EXPECT_NE(error_of("c1.ply", header + "element vertex 333333333333333333333333333\nproperty float x\nend_header\n")
+                .find("c1.ply:3: malformed 'element'"),
+            std::string::npos);
+  EXPECT_NE(error_of("c2.ply", header + "element vertex 1000000000\nproperty float x\nend_header\n")
+                .find("element 'vertex' claims 1000000000 items, more than the file's"),
+            std::string::npos);
+  EXPECT_NE(error_of("c3.ply", header + "element vertex 3000000000\nproperty float x\nend_header\n")
+                .find("mpath reads at most"),
+            std::string::npos);
+  // A non-integer object id is refused, not cast.
+  EXPECT_NE(error_of("o.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                              "element face 1\nproperty list uchar int vertex_indices\nproperty float object\nend_header\n"
+                              "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 1e30\n")
+                .find("object id 1e+30 is not a whole number"),
+            std::string::npos);
 }
 
 }  // namespace

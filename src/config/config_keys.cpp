@@ -87,6 +87,17 @@ long long positive(long long v, const ValueSource& src) {
   return v;
 }
 
+// The most lines a store or a first shot may have: 1e12 lines take about
+// 7 TB of store and days of tracing on a cluster; more is a typing error.
+constexpr long long kMaxLines = 1'000'000'000'000LL;
+
+// A positive integer of at most `most`: a larger one is an error, not clamped.
+long long positive_at_most(long long v, long long most, const ValueSource& src) {
+  positive(v, src);
+  if (v > most) bad_value(src, fmt::format("at most {} (got {})", most, v));
+  return v;
+}
+
 double in_range(double v, double lo, double hi, const ValueSource& src) {
   if (!(v >= lo && v <= hi)) bad_value(src, fmt::format("expected a value in [{}, {}], got {}", lo, hi, v));
   return v;
@@ -129,9 +140,9 @@ CameraOptions get_camera(const toml::table& table, const ValueSource& parent, si
     else if (key == "look_at") cam.look_at = get_vec3(node, src);
     else if (key == "up") cam.up = get_vec3(node, src);
     else if (key == "fov_deg") cam.fov_deg = in_range(get_number(node, src), 1.0, 179.0, src);
-    else if (key == "width") cam.width = static_cast<int>(std::min(positive(get_integer(node, src), src), 16384LL));
-    else if (key == "height") cam.height = static_cast<int>(std::min(positive(get_integer(node, src), src), 16384LL));
-    else if (key == "samples") cam.samples = static_cast<int>(std::min(positive(get_integer(node, src), src), 4096LL));
+    else if (key == "width") cam.width = static_cast<int>(positive_at_most(get_integer(node, src), 16384, src));
+    else if (key == "height") cam.height = static_cast<int>(positive_at_most(get_integer(node, src), 16384, src));
+    else if (key == "samples") cam.samples = static_cast<int>(positive_at_most(get_integer(node, src), 4096, src));
     else if (key == "exposure") cam.exposure = get_number(node, src);
     else bad_value(src, "unknown key");
   }
@@ -232,7 +243,7 @@ std::vector<ConfigKey> make_table() {
        GET(o.hierarchy.transport)},
       {"lines.total",
        "stored lines in all boxes (hierarchical, multipath), or global lines of the first pass (classic; later passes use fewer)",
-       SET(o.lines.total = positive(get_integer(n, s), s)), GET(static_cast<int64_t>(o.lines.total))},
+       SET(o.lines.total = positive_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.lines.total))},
       {"lines.root_fraction", "share of lines in the root box (hierarchical method)",
        SET(o.lines.root_fraction = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.lines.root_fraction)},
       {"lines.box_budget", "how the subscenes share the rest: by grouping `\"quotient\"` or by `\"objects\"`",
@@ -249,7 +260,7 @@ std::vector<ConfigKey> make_table() {
       {"lines.sequence", "`\"halton\"` (randomised Halton) or `\"random\"` global lines; see algorithm.md",
        SET(o.lines.sequence = get_choice(n, s, "sequence", {"random", "halton"})), GET(o.lines.sequence)},
       {"first_shot.lines", "local lines of the first shot, shared among emitting faces by power",
-       SET(o.first_shot.lines = positive(get_integer(n, s), s)), GET(static_cast<int64_t>(o.first_shot.lines))},
+       SET(o.first_shot.lines = positive_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.first_shot.lines))},
       {"first_shot.accelerate",
        "hierarchical method: local lines entering a subscene are tested against the AR's associated patches first "
        "(algorithm.md)",
@@ -262,7 +273,7 @@ std::vector<ConfigKey> make_table() {
        "`\"hierarchical\"`, `\"multipath\"` (stored lines, root box only) or `\"classic\"` (fresh lines, no store)",
        SET(o.solver.method = get_method(n, s)), GET(std::string(to_string(o.solver.method)))},
       {"solver.iterations", "cap on passes (classic) or iterations over the stored lines",
-       SET(o.solver.iterations = static_cast<int>(std::min(positive(get_integer(n, s), s), 100000LL))),
+       SET(o.solver.iterations = static_cast<int>(positive_at_most(get_integer(n, s), 100000, s))),
        GET(o.solver.iterations)},
       {"solver.tolerance", "stop when (unshot power + power held in ARs) / emitted power falls below this",
        SET(o.solver.tolerance = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.solver.tolerance)},

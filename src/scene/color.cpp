@@ -34,11 +34,13 @@ Xyz cie_cmf(double l) {
 
 Chromaticity spectrum_chromaticity(double lo, double hi, const std::vector<double>& s) {
   Xyz sum;
-  if (s.size() < 2) return {};
-  // Integrate the piecewise-linear spectrum at 1 nm steps.
-  const int steps = std::max(1, static_cast<int>(std::ceil(hi - lo)));
+  if (s.size() < 2 || !(hi > lo)) return {};
+  // Integrate the piecewise-linear spectrum at 1 nm steps where the observer sees (360 to 830 nm).
+  const double a = std::max(lo, 360.0), b = std::min(hi, 830.0);
+  if (!(b > a)) return {};
+  const int steps = std::max(1, static_cast<int>(std::ceil(b - a)));
   for (int i = 0; i <= steps; ++i) {
-    const double l = lo + (hi - lo) * i / steps;
+    const double l = a + (b - a) * i / steps;
     const double u = (l - lo) / (hi - lo) * static_cast<double>(s.size() - 1);
     const size_t k = std::min(static_cast<size_t>(u), s.size() - 2);
     const double v = s[k] + (s[k + 1] - s[k]) * (u - static_cast<double>(k));

@@ -6,6 +6,7 @@
 // Colours follow docs/colour.md; `ed` (lm/m2) becomes W/m2 at 179 lm/W.
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <map>
 #include <numbers>
 #include <set>
@@ -37,6 +38,7 @@ struct MgfVertex {
 
 // A scene larger than this is almost surely a mistake (or hostile).
 constexpr size_t kMaxPolygons = 20'000'000;
+constexpr size_t kMaxIncludeReads = 100'000;
 
 struct Entry {
   std::vector<std::string> t;
@@ -114,7 +116,9 @@ class MgfReader {
     else if (k == "cspec") set_cspec(t);
     else if (k == "cct") {
       expect(t, 1, 1, "cct kelvin");
-      *current_color_ = blackbody_chromaticity(number(t[1], "cct"));
+      const double kelvin = number(t[1], "cct");
+      if (!(kelvin >= 500 && kelvin <= 1e6)) fail(fmt::format("'cct {}': a colour temperature must be 500 to 1e6 K", t[1]));
+      *current_color_ = blackbody_chromaticity(kelvin);
     } else if (k == "cmix") set_cmix(t);
     else if (k == "m") {
       MgfMaterial fresh;
@@ -186,9 +190,20 @@ class MgfReader {
 
   void set_cspec(const std::vector<std::string>& t) {
     if (t.size() < 5) fail("malformed 'cspec': expected 'cspec lo_nm hi_nm v1 v2 ...'");
+    const double lo = number(t[1], "lo_nm"), hi = number(t[2], "hi_nm");
+    // The CIE observer sees 360 to 830 nm: a spectrum must overlap it, and carry some energy there.
+    if (!(lo > 0 && hi > lo && hi - lo <= 1e4))
+      fail(fmt::format("'cspec' range {} to {} nm: need 0 < lo < hi, at most 10000 nm apart", t[1], t[2]));
+    if (hi <= 360 || lo >= 830) fail(fmt::format("'cspec' range {} to {} nm is outside the visible 360 to 830 nm", t[1], t[2]));
     std::vector<double> samples;
-    for (size_t i = 3; i < t.size(); ++i) samples.push_back(number(t[i], "spectral value"));
-    *current_color_ = spectrum_chromaticity(number(t[1], "lo_nm"), number(t[2], "hi_nm"), samples);
+    double sum = 0;
+    for (size_t i = 3; i < t.size(); ++i) {
+      samples.push_back(number(t[i], "spectral value"));
+      if (samples.back() < 0) fail(fmt::format("'cspec' value {} is negative", t[i]));
+      sum += samples.back();
+    }
+    if (!(sum > 0)) fail("'cspec' has no energy (every value is 0): its colour is undefined");
+    *current_color_ = spectrum_chromaticity(lo, hi, samples);
   }
 
   void set_cmix(const std::vector<std::string>& t) {
@@ -308,9 +323,15 @@ class MgfReader {
       } else if (a == "-i" || a == "-a") {
         need(1);
         flush();
-        repeat = a == "-a" ? index[array++] : static_cast<int>(number(args[++i], "-i"));
-        if (a == "-a") ++i;
-        if (repeat < 0) fail("'-i' count must not be negative");
+        if (a == "-a") {
+          repeat = index[array++];
+          ++i;
+        } else {
+          const double n = number(args[++i], "-i");
+          if (!(n >= 0 && n <= 1e6) || n != std::floor(n))
+            fail(fmt::format("'-i {}': the count must be a whole number from 0 to 1000000", args[i]));
+          repeat = static_cast<int>(n);
+        }
       } else {
         fail(fmt::format("unknown xf argument '{}'", a));
       }
@@ -324,6 +345,9 @@ class MgfReader {
     fs::path file = t[1];
     if (file.is_relative()) file = path.parent_path() / file;
     if (!fs::exists(file)) fail(fmt::format("included file '{}' not found", file.string()));
+    // Includes that include each other twice over read 2^depth files: bounded.
+    if (++includes_read_ > kMaxIncludeReads)
+      fail(fmt::format("more than {} files read through 'i' (includes that fan out or loop?)", kMaxIncludeReads));
     const std::vector<std::string> args(t.begin() + 2, t.end());
     if (!array_counts(args).empty()) fail("'-a' arrays are supported in 'xf', not in 'i'");
     const bool has_xf = !args.empty();
@@ -476,6 +500,7 @@ class MgfReader {
   std::map<std::string, Chromaticity> colors_;
   Chromaticity unnamed_color_;
   Chromaticity* current_color_;
+  size_t includes_read_ = 0;  // files read through `i`, over the whole scene
   std::map<std::string, MgfMaterial> materials_;
   MgfMaterial unnamed_material_;
   MgfMaterial* current_material_;

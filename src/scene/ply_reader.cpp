@@ -5,7 +5,9 @@
 // connected component is one object.
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <numbers>
@@ -45,17 +47,24 @@ struct Element {
 
 bool is_integer_type(const std::string& t) { return t != "float" && t != "float32" && t != "double" && t != "float64"; }
 
+// Where in the data a value is, put into words only for an error message.
+struct Where {
+  const std::string& element;
+  size_t item, count;
+};
+std::string format_as(const Where& w) { return fmt::format("element '{}' item {} of {}", w.element, w.item, w.count); }
+
 // Reads scalar values of the element data, ASCII or binary.
 class ValueSource {
  public:
   ValueSource(std::istream& in, Format format, std::string path) : in_(in), format_(format), path_(std::move(path)) {}
 
-  double read(const std::string& type, const std::string& context) {
-    if (format_ == Format::ascii) return read_ascii(context);
+  double read(const std::string& type, const Where& where) {
+    if (format_ == Format::ascii) return read_ascii(where);
     unsigned char bytes[8];
     const size_t n = ply_type_size(type);
     if (!in_.read(reinterpret_cast<char*>(bytes), static_cast<std::streamsize>(n)))
-      throw InputError(fmt::format("{}: unexpected end of file in {}", path_, context));
+      throw InputError(fmt::format("{}: unexpected end of file in {}", path_, format_as(where)));
     const bool swap = (format_ == Format::binary_be) == (std::endian::native == std::endian::little);
     if (swap) std::reverse(bytes, bytes + n);
     return decode(bytes, type);
@@ -73,12 +82,13 @@ class ValueSource {
     double v; std::memcpy(&v, b, 8); return v;
   }
 
-  double read_ascii(const std::string& context) {
+  double read_ascii(const Where& where) {
     std::string token;
-    if (!(in_ >> token)) throw InputError(fmt::format("{}: unexpected end of file in {}", path_, context));
+    if (!(in_ >> token)) throw InputError(fmt::format("{}: unexpected end of file in {}", path_, format_as(where)));
     std::istringstream s(token);
     double v;
-    if (!(s >> v) || !s.eof()) throw InputError(fmt::format("{}: expected a number in {}, got '{}'", path_, context, token));
+    if (!(s >> v) || !s.eof())
+      throw InputError(fmt::format("{}: expected a number in {}, got '{}'", path_, format_as(where), token));
     return v;
   }
 
@@ -91,6 +101,8 @@ struct Header {
   Format format = Format::ascii;
   std::vector<Element> elements;
 };
+
+constexpr long long kMaxPlyItems = 2'000'000'000;
 
 Header read_header(std::istream& in, const std::string& path) {
   Header h;
@@ -116,10 +128,19 @@ Header read_header(std::istream& in, const std::string& path) {
       have_format = true;
     } else if (key == "element") {
       Element e;
-      long long count = -1;
+      std::string count;
       s >> e.name >> count;
-      if (e.name.empty() || count < 0) throw fail("malformed 'element': expected 'element name count'");
-      e.count = static_cast<size_t>(count);
+      size_t used = 0;
+      long long n = -1;
+      try {
+        n = std::stoll(count, &used);
+      } catch (const std::exception&) {
+      }
+      if (e.name.empty() || used != count.size() || n < 0)
+        throw fail("malformed 'element': expected 'element name count'");
+      if (n > kMaxPlyItems)
+        throw fail(fmt::format("element '{}' has {} items; mpath reads at most {}", e.name, n, kMaxPlyItems));
+      e.count = static_cast<size_t>(n);
       h.elements.push_back(e);
     } else if (key == "property") {
       if (h.elements.empty()) throw fail("'property' before any 'element'");
@@ -176,12 +197,21 @@ Scene read_ply(const fs::path& path) {
   const std::string name = path.string();
   const Header header = read_header(in, name);
   ValueSource values(in, header.format, name);
+  // Every item of an element with properties takes at least a byte: a count
+  // beyond the file's size is a damaged header, not minutes of work.
+  std::error_code ec;
+  const auto file_bytes = std::filesystem::file_size(path, ec);
+  for (const Element& e : header.elements)
+    if (!e.properties.empty() && !ec && e.count > file_bytes)
+      throw InputError(fmt::format("{}: element '{}' claims {} items, more than the file's {} bytes hold", name, e.name,
+                                   e.count, file_bytes));
 
   std::vector<Vec3> vertices;
   Faces faces;
   for (const Element& e : header.elements) {
+    if (e.properties.empty()) continue;  // nothing to read, however many
     for (size_t item = 0; item < e.count; ++item) {
-      const std::string context = fmt::format("element '{}' item {} of {}", e.name, item, e.count);
+      const Where context{e.name, item, e.count};
       Vec3 p;
       std::vector<uint32_t> list;
       Rgb rho{0.5, 0.5, 0.5}, emit{0, 0, 0};
@@ -189,19 +219,20 @@ Scene read_ply(const fs::path& path) {
       for (const Property& prop : e.properties) {
         if (!prop.count_type.empty()) {
           const double n = values.read(prop.count_type, context);
-          if (n < 0 || n > 1e6) throw InputError(fmt::format("{}: bad list length {} in {}", name, n, context));
+          if (!(n >= 0 && n <= 1e6) || n != std::floor(n))
+            throw InputError(fmt::format("{}: bad list length {} in {}", name, n, format_as(context)));
           for (int k = 0; k < static_cast<int>(n); ++k) {
             const double v = values.read(prop.type, context);
             if (e.name == "face" && (prop.name == "vertex_indices" || prop.name == "vertex_index")) {
-              if (v < 0 || v >= static_cast<double>(vertices.size()))
-                throw InputError(fmt::format("{}: vertex index {} out of range in {}", name, v, context));
+              if (!(v >= 0 && v < static_cast<double>(vertices.size())) || v != std::floor(v))
+                throw InputError(fmt::format("{}: vertex index {} out of range in {}", name, v, format_as(context)));
               list.push_back(static_cast<uint32_t>(v));
             }
           }
           continue;
         }
         double v = values.read(prop.type, context);
-        if (!std::isfinite(v)) throw InputError(fmt::format("{}: non-finite value for '{}' in {}", name, prop.name, context));
+        if (!std::isfinite(v)) throw InputError(fmt::format("{}: non-finite value for '{}' in {}", name, prop.name, format_as(context)));
         if (e.name == "vertex") {
           if (prop.name == "x") p.x = v;
           else if (prop.name == "y") p.y = v;
@@ -216,6 +247,8 @@ Scene read_ply(const fs::path& path) {
             emit[prop.name.back() == 'r' ? 0 : (prop.name.back() == 'g' ? 1 : 2)] = v / std::numbers::pi;
             faces.has_emit = true;
           } else if (prop.name == "object") {
+            if (!(v >= 0 && v <= 1e9) || v != std::floor(v))
+              throw InputError(fmt::format("{}: object id {} is not a whole number in [0, 1e9] in {}", name, v, format_as(context)));
             object = static_cast<int>(v);
             faces.has_object = true;
           } else if (prop.name == "two_sided") {
@@ -226,7 +259,7 @@ Scene read_ply(const fs::path& path) {
       }
       if (e.name == "vertex") vertices.push_back(p);
       if (e.name == "face") {
-        if (list.size() < 3) throw InputError(fmt::format("{}: face with fewer than 3 vertices in {}", name, context));
+        if (list.size() < 3) throw InputError(fmt::format("{}: face with fewer than 3 vertices in {}", name, format_as(context)));
         faces.indices.push_back(std::move(list));
         faces.rho.push_back(rho);
         faces.emit.push_back(emit);

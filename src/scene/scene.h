@@ -45,6 +45,11 @@ struct Scene {
 Vec3 newell_normal(const std::vector<Vec3>& vertices);
 double polygon_area(const std::vector<Vec3>& vertices);
 
+// Limits of scenes single-precision tracing resolves (metres).
+inline constexpr double kMaxCoordinate = 1e7;
+inline constexpr double kMaxSceneSize = 1e7;
+inline constexpr double kMinSceneSize = 1e-5;
+
 // The largest emitted radiance a material may have, W/sr/m2.
 inline constexpr double kMaxEmission = 1e12;
 

@@ -1,5 +1,7 @@
 // Picks the reader by file extension and applies the configured material overrides.
 #include <algorithm>
+#include <cmath>
+#include <filesystem>
 
 #include "error.h"
 #include "scene_readers.h"
@@ -33,10 +35,30 @@ std::vector<int> require_materials(const Scene& scene, const std::string& key, c
 
 }  // namespace
 
+// Tracing is in single precision: coordinates must be finite and well inside
+// float's range, and the scene no larger than 1e7 m nor smaller than 1e-5 m
+// across (a float resolves about 1e-7 of the scene; see docs/user-guide.md).
+static void check_extent(const Scene& scene) {
+  for (const Polygon& p : scene.polygons)
+    for (const Vec3& v : p.vertices)
+      for (int i = 0; i < 3; ++i)
+        if (!std::isfinite(v[i]) || std::fabs(v[i]) > kMaxCoordinate)
+          throw InputError(fmt::format("{}: a vertex at ({}, {}, {}) is beyond {} m, more than single-precision "
+                                       "tracing can resolve (check the file's units and transforms)",
+                                       scene.file.string(), v.x, v.y, v.z, kMaxCoordinate));
+  const double size = scene.bounds().diagonal();
+  if (!(size <= kMaxSceneSize && size >= kMinSceneSize))
+    throw InputError(fmt::format("{}: the scene is {} m across; mpath solves scenes from {} m to {} m across (check "
+                                 "the file's units)", scene.file.string(), size, kMinSceneSize, kMaxSceneSize));
+}
+
 Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<std::string>& warnings) {
   const auto& path = options.file;
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw InputError(fmt::format("{}: not a regular file (a folder, device or pipe cannot be a scene file)", path.string()));
   Scene scene;
   if (ext == ".obj") scene = read_obj(path);
   else if (ext == ".ply") scene = read_ply(path);
@@ -50,6 +72,7 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
   for (const auto& m : scene.materials) validate_material(m, path.string());
 
   if (scene.polygons.empty()) throw InputError(fmt::format("{}: the scene has no polygons", path.string()));
+  check_extent(scene);
   const bool any_emitter = std::any_of(scene.polygons.begin(), scene.polygons.end(),
                                        [&](const Polygon& p) { return scene.materials[p.material].emits(); });
   if (!any_emitter)

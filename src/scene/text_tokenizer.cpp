@@ -9,6 +9,9 @@ namespace mpath {
 
 TextTokenizer::TextTokenizer(const std::filesystem::path& path) : path_(path.string()) {
   if (!std::filesystem::exists(path)) throw InputError(fmt::format("{}: file not found", path_));
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError(fmt::format("{}: not a regular file (a folder, device or pipe cannot be a scene file)", path_));
   in_.open(path);
   if (!in_) throw InputError(fmt::format("{}: cannot open file", path_));
 }
