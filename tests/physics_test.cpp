@@ -98,6 +98,29 @@ TEST(EnergyBalance, ClosesInAClosedSceneWithNothingEscaping) {
   EXPECT_LT((s.state.energy.escaped[0]) / emitted, 1e-6);
 }
 
+// A millimetre emitting cube in a black kilometre room, near the origin and
+// 500 m from it: a convex object cannot light itself, so B = E exactly on
+// every face of it (local lines start a hair behind their patch; the hair is
+// sized by the patch and the float spacing at its place, not only by the
+// scene, and its own object met within float rounding is not a surface).
+TEST(LocalLines, ATinyObjectInAHugeSceneDoesNotLightItself) {
+  for (const Vec3 at : {Vec3{3, 2, 1}, Vec3{400, 300, 2}}) {
+    Scene scene;
+    const int black = test::add_material(scene, "black", 0.0, 0.0);
+    const int lamp = test::add_material(scene, "lamp", 0.5, 1.0);
+    test::add_box(scene, {-500, -500, -500}, {500, 500, 500}, true, black, test::add_object(scene, "room"));
+    test::add_box(scene, at, at + Vec3{1e-3, 1e-3, 1e-3}, false, lamp, test::add_object(scene, "cube"));
+    Options o = test_options(100'000, 200'000, 0.0);
+    o.mesh.max_patch_area = 1e9;  // one patch a face
+    const auto s = solve_classic_in_memory(scene, o);
+    for (size_t f = 0; f < s.mesh.face_count(); ++f) {
+      if (s.mesh.patches[s.mesh.face_patch[f]].material != lamp) continue;
+      const double e = s.state.face_exitance(f)[0];
+      EXPECT_NEAR(s.state.radiosity(s.mesh, f)[0], e, 1e-9 * e) << "cube at " << at.x << ", face " << f;
+    }
+  }
+}
+
 TEST(EnergyBalance, ClosesInTheOpenCornellBoxWherePowerEscapes) {
   Options o = test_options(500'000, 200'000, 0.002);
   o.scene.file = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box/cornell_box.obj";

@@ -45,7 +45,9 @@ struct LeaveContext {
   const PatchMesh* mesh;
   const Tracer* tracer;
   int from;  // traced patch
+  double behind;   // distances below this are behind the start point: never met
   double contact;  // distances below this are contacts with the start plane
+  double self;     // distances below this to the patch's own object are float rounding, not a surface met
 };
 
 void leave_filter(const RTCFilterFunctionNArguments* args) {
@@ -56,10 +58,18 @@ void leave_filter(const RTCFilterFunctionNArguments* args) {
     args->valid[0] = 0;
     return;
   }
+  if (t < ctx->behind) {  // between the hair's start and the patch: behind where the line leaves
+    args->valid[0] = 0;
+    return;
+  }
   const auto& patches = ctx->mesh->patches;
   const int a = ctx->tracer->global(prim);
   const int b = ctx->tracer->global(ctx->from);
   if (t <= ctx->contact && dot(patches[a].normal, patches[b].normal) > 0) args->valid[0] = 0;
+  // A line that leaves a patch within float rounding of an edge of its own
+  // object can be placed just outside the neighbouring face and meet it at
+  // once: a surface that close is the object itself, not something lit.
+  else if (t <= ctx->self && patches[a].object == patches[b].object) args->valid[0] = 0;
 }
 
 void embree_error(void*, RTCError code, const char* message) {
@@ -161,14 +171,24 @@ NearestHit Tracer::nearest_from(int from, const Vec3& org, const Vec3& dir, doub
   ctx.mesh = &mesh_;
   ctx.tracer = this;
   ctx.from = from;
-  ctx.contact = 2.0 * hair_;
-  const Vec3 start = org - dir * hair_;
+  // The hair is the scene's 1e-6, but no more than a thousandth of the
+  // patch's size (a millimetre patch in a kilometre scene must not start
+  // its lines on its far side), and no less than a few float steps at the
+  // patch's place (where single precision can still tell the two apart).
+  const double size = std::sqrt(mesh_.patches[global(from)].area);
+  const double magnitude = std::max({std::fabs(org.x), std::fabs(org.y), std::fabs(org.z), 1e-30});
+  const double step = magnitude * 0x1p-23;  // float spacing near |org|
+  const double hair = std::max(4.0 * step, std::min(hair_, 1e-3 * size));
+  ctx.behind = hair - 2.0 * step;  // >= hair / 2: contacts within two float steps of the patch still count
+  ctx.contact = 2.0 * hair;
+  ctx.self = hair + 16.0 * step;
+  const Vec3 start = org - dir * hair;
   RTCRayHit rh;
   init_ray(rh, start, dir, 0.0, tfar);
   rtcIntersect1(scene_, &ctx.context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
   const int local = static_cast<int>(rh.hit.primID);
-  return {global(local), std::max(0.0, plane_distance(local, start, dir, rh.ray.tfar) - hair_)};
+  return {global(local), std::max(0.0, plane_distance(local, start, dir, rh.ray.tfar) - hair)};
 }
 
 double Tracer::plane_distance(int local, const Vec3& org, const Vec3& dir, double fallback) const {
