@@ -104,3 +104,30 @@ TEST(Mesh, AutomaticPatchAreaFollowsTheSceneSize) {
 
 }  // namespace
 }  // namespace mpath
+
+namespace mpath {
+namespace {
+
+// A scene whose every polygon is degenerate (collinear or repeated
+// vertices) is an error naming the file, not an internal check.
+TEST(Mesh, ASceneOfDegeneratePolygonsOnlyIsAnError) {
+  Scene scene;
+  scene.file = "flat.obj";
+  const int m = test::add_material(scene, "light", 0.5, 1.0);
+  const int o = test::add_object(scene, "line");
+  scene.polygons.push_back({{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, m, o});
+  scene.polygons.push_back({{{0, 0, 0}, {0, 0, 0}, {0, 0, 1}}, m, o});
+  for (const double area : {0.0, 0.1}) {
+    try {
+      build_mesh(scene, area);
+      ADD_FAILURE() << area;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("flat.obj: no polygon of the scene has an area (all 2 are degenerate"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mpath

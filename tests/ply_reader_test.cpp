@@ -104,6 +104,35 @@ TEST(SolutionPly, RefusesValuesNoFloatHolds) {
   }
 }
 
+// mpath-compare and scripts read solutions with read_solution_ply: a NaN or
+// an infinity in one is refused by face, never compared.
+TEST(SolutionPly, ReadingRefusesValuesThatAreNotFiniteNumbers) {
+  TempDir dir;
+  const auto solution = [&](float b) {
+    std::string text = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nproperty float area\n"
+                       "property float B_r\nproperty float B_g\nproperty float B_b\nend_header\n";
+    const float v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    text.append(reinterpret_cast<const char*>(v), sizeof v);
+    text.push_back(3);
+    const int32_t idx[3] = {0, 1, 2};
+    text.append(reinterpret_cast<const char*>(idx), sizeof idx);
+    const float values[4] = {0.5f, b, 1.0f, 1.0f};
+    text.append(reinterpret_cast<const char*>(values), sizeof values);
+    write_file(dir / "s.ply", text);
+    return dir / "s.ply";
+  };
+  EXPECT_FLOAT_EQ(read_solution_ply(solution(2.0f)).radiosity[0][0], 2.0f);
+  for (const float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    try {
+      read_solution_ply(solution(bad));
+      ADD_FAILURE() << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("face 0 has a value that is not a finite number"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(PlyReader, ReadsBackTheSolutionItWrote) {
   TempDir dir;
   const Scene scene = test::furnace_scene(0.5, 1.0);

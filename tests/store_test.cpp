@@ -2,6 +2,7 @@
 // an in-memory solve over the same lines, across shards and interruptions,
 // and with damaged or mismatched stores.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 #include <random>
@@ -170,6 +171,26 @@ TEST(Store, InterruptedProgramsRemoveTheirTemporariesAndSayWhatToDo) {
   EXPECT_FALSE(has_hidden_temporaries(store));
   EXPECT_FALSE(std::filesystem::exists(store / "manifest.json"));
   EXPECT_FALSE(std::filesystem::exists(store / "box0000.lines"));
+}
+
+// A run killed with SIGKILL while writing leaves `.NAME.tmp.PID`; the next
+// run that writes NAME removes it once that process is gone, and leaves the
+// temporaries of running processes alone.
+TEST(Store, TemporariesOfKilledRunsAreRemovedByTheNextRun) {
+  TempDir dir;
+  const std::string store = " store.dir=" + (dir / "store").string();
+  ASSERT_EQ(preprocess(store).exit_code, 0);
+  const RunResult gone = test::run("bash -c 'echo $$'");
+  const std::string dead_pid = gone.output.substr(0, gone.output.find_first_of("\r\n"));
+  std::filesystem::create_directories(dir / "out");
+  const auto stale = dir / "out" / (".report.json.tmp." + dead_pid);
+  const auto live = dir / "out" / (".report.json.tmp." + std::to_string(getppid()));  // the test's parent runs on
+  test::write_file(stale, "half a report");
+  test::write_file(live, "being written");
+  ASSERT_EQ(solve(store + " output.dir=" + (dir / "out").string()).exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(stale));
+  EXPECT_TRUE(std::filesystem::exists(live));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out/report.json"));
 }
 
 TEST(Store, DamagedOrMismatchedStoresAreRefusedByName) {

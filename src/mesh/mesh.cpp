@@ -201,7 +201,11 @@ PatchMesh build_mesh(const Scene& scene, double max_patch_area) {
   PatchMesh mesh;
   mesh.bounds = scene.bounds();
   mesh.max_patch_area = max_patch_area > 0 ? max_patch_area : automatic_patch_area(scene);
-  MPATH_CHECK(mesh.max_patch_area > 0, "scene has zero extent");
+  double area = 0;
+  for (const Polygon& p : scene.polygons) area += polygon_area(p.vertices);
+  if (!(area > 0) || !(mesh.max_patch_area > 0))
+    throw InputError(fmt::format("{}: no polygon of the scene has an area (all {} are degenerate: collinear or "
+                                 "repeated vertices)", scene.file.string(), scene.polygons.size()));
   const double eps = 1e-9 * mesh.bounds.diagonal();
   // Refuse a patch size that would fill memory before trying: every patch
   // costs about 200 bytes across mesh, tracer and solver.

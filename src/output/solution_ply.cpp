@@ -151,6 +151,10 @@ SolutionFaces read_solution_ply(const std::filesystem::path& path) {
     out.area[f] = get(area_at);
     out.radiosity[f] = {get(b_at[0]), get(b_at[1]), get(b_at[2])};
     if (has_emit) out.exitance[f] = {get(e_at[0]), get(e_at[1]), get(e_at[2])};
+    // No comparison is made with a value that is not a number or not finite.
+    bool finite = std::isfinite(out.area[f]) && out.area[f] >= 0;
+    for (int c = 0; c < 3; ++c) finite &= std::isfinite(out.radiosity[f][c]) && std::isfinite(out.exitance[f][c]);
+    if (!finite) throw InputError(fmt::format("{}: face {} has a value that is not a finite number", path.string(), f));
   }
   return out;
 }

@@ -1,5 +1,6 @@
 #include "atomic_file.h"
 
+#include <signal.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -27,14 +28,38 @@ void commit_temporary(const fs::path& temp, const fs::path& final_path) {
   std::error_code ec;
   fs::rename(temp, final_path, ec);
   if (ec) {
-    fs::remove(temp, ec);
+    std::error_code ignored;  // the rename's error is the one to report
+    fs::remove(temp, ignored);
     throw InputError(fmt::format("{}: cannot move finished file into place: {}", final_path.string(), ec.message()));
   }
 }
 
 AtomicFile::AtomicFile(const fs::path& final_path) : AtomicFile(final_path, temporary_path(final_path)) {}
 
+// Temporaries of `final_path` left by a run that was killed (SIGKILL gives
+// no chance to clean up): `.NAME.tmp.PID` whose process is gone.
+void remove_stale_temporaries(const fs::path& final_path) {
+  std::string prefix = ".";
+  prefix += final_path.filename().string();
+  prefix += ".tmp.";
+  std::error_code ec;
+  const fs::path dir = final_path.parent_path().empty() ? fs::path(".") : final_path.parent_path();
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string pid_text = name.substr(prefix.size());
+    if (pid_text.empty() || pid_text.find_first_not_of("0123456789") != std::string::npos || pid_text.size() > 9) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(pid_text));
+    if (pid == getpid() || pid <= 0) continue;
+    if (kill(pid, 0) == -1 && errno == ESRCH) {
+      std::error_code ignored;
+      fs::remove(it->path(), ignored);
+    }
+  }
+}
+
 AtomicFile::AtomicFile(const fs::path& final_path, const fs::path& temp_path) : final_(final_path), temp_(temp_path) {
+  remove_stale_temporaries(final_path);
   interrupt_slot_ = remember_temporary(temp_);
   out_.open(temp_, std::ios::binary | std::ios::trunc);
   if (!out_) throw InputError(fmt::format("{}: cannot create file: {}", temp_.string(), std::strerror(errno)));
