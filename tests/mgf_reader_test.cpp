@@ -182,6 +182,9 @@ TEST(MgfReader, NamesFileLineAndCauseOfBadInput) {
   EXPECT_NE(mgf_error("c x =\ncxy 0.8 0.5\n").find("outside the CIE diagram"), std::string::npos);
   EXPECT_NE(mgf_error("xf -i 1e12 -t 1 0 0\nxf\n").find("e.mgf:1: '-i 1e12': the count must be a whole number"),
             std::string::npos);
+  std::string nested;
+  for (int k = 0; k < 300; ++k) nested += "o level" + std::to_string(k) + "\n";
+  EXPECT_NE(mgf_error(nested).find("e.mgf:257: objects nested more than 256 deep"), std::string::npos);
   // Colours that have none (found by fuzz/fuzz_mgf: an empty range divided by zero).
   EXPECT_NE(mgf_error("c x =\ncspec 400 400 1 2 3\n").find("e.mgf:2: 'cspec' range 400 to 400 nm"), std::string::npos);
   EXPECT_NE(mgf_error("c x =\ncspec 900 1000 1 2\n").find("outside the visible"), std::string::npos);

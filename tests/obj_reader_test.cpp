@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "error.h"
 #include "scene_readers.h"
 #include "test_util.h"
@@ -152,6 +154,15 @@ TEST(SceneLoader, RefusesDevicesPipesAndScenesFloatsCannotResolve) {
     return dir / (name + ".obj");
   };
   EXPECT_EQ(load_error(scene("metre", 1.0)), "");
+  // A polygon of 20,000 vertices (a circle) is refused, not triangulated for minutes.
+  std::string circle = "mtllib metre.mtl\nusemtl light\n", face = "f";
+  for (int k = 0; k < 20000; ++k) {
+    circle += fmt::format("v {} {} 0\n", std::cos(k * 2 * M_PI / 20000), std::sin(k * 2 * M_PI / 20000));
+    face += fmt::format(" {}", k + 1);
+  }
+  write_file(dir / "circle.obj", circle + face + "\n");
+  EXPECT_NE(load_error(dir / "circle.obj").find("polygon 1 has 20000 vertices; mpath takes at most 10000"),
+            std::string::npos);
   EXPECT_NE(load_error(scene("huge", 1e18)).find("beyond 10000000 m, more than single-precision tracing can resolve"),
             std::string::npos);
   EXPECT_NE(load_error(scene("tiny", 1e-9)).find("mpath solves scenes from 1e-05 m to 10000000 m across"),

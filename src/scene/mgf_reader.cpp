@@ -39,6 +39,7 @@ struct MgfVertex {
 // A scene larger than this is almost surely a mistake (or hostile).
 constexpr size_t kMaxPolygons = 20'000'000;
 constexpr size_t kMaxIncludeReads = 100'000;
+constexpr size_t kMaxObjectDepth = 256;
 
 struct Entry {
   std::vector<std::string> t;
@@ -144,6 +145,8 @@ class MgfReader {
     else if (k == "p" || k == "n") set_vertex_vector(t);
     else if (k == "o") {
       if (t.size() > 2) fail("malformed 'o': expected 'o [name]'");
+      if (t.size() == 2 && objects_.size() >= kMaxObjectDepth)
+        fail(fmt::format("objects nested more than {} deep ('o' without its closing 'o'?)", kMaxObjectDepth));
       if (t.size() == 2) objects_.push_back({t[1], -1});
       else if (objects_.empty()) fail("'o' end without a matching 'o name'");
       else objects_.pop_back();

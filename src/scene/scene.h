@@ -45,6 +45,10 @@ struct Scene {
 Vec3 newell_normal(const std::vector<Vec3>& vertices);
 double polygon_area(const std::vector<Vec3>& vertices);
 
+// The most vertices a polygon may have (triangulating a concave polygon
+// takes time growing with the square of its vertices).
+inline constexpr size_t kMaxPolygonVertices = 10'000;
+
 // Limits of scenes single-precision tracing resolves (metres).
 inline constexpr double kMaxCoordinate = 1e7;
 inline constexpr double kMaxSceneSize = 1e7;

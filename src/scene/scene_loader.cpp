@@ -72,6 +72,10 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
   for (const auto& m : scene.materials) validate_material(m, path.string());
 
   if (scene.polygons.empty()) throw InputError(fmt::format("{}: the scene has no polygons", path.string()));
+  for (size_t i = 0; i < scene.polygons.size(); ++i)
+    if (scene.polygons[i].vertices.size() > kMaxPolygonVertices)
+      throw InputError(fmt::format("{}: polygon {} has {} vertices; mpath takes at most {} (split it into smaller ones)",
+                                   path.string(), i + 1, scene.polygons[i].vertices.size(), kMaxPolygonVertices));
   check_extent(scene);
   const bool any_emitter = std::any_of(scene.polygons.begin(), scene.polygons.end(),
                                        [&](const Polygon& p) { return scene.materials[p.material].emits(); });
