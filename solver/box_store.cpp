@@ -361,6 +361,14 @@ std::vector<double> BoxStore::face_crossings(size_t faces) const {
   return out;
 }
 
+std::vector<bool> BoxStore::faces_crossed(size_t faces) const {
+  std::vector<bool> out(faces, false);
+  for (const StoreBox& b : boxes_)
+    for (size_t f = 0; f < b.face_global.size(); ++f)
+      if (b.face_crossings[f] > 0) out[b.face_global[f]] = true;
+  return out;
+}
+
 void BoxStore::read(int box, uint64_t chunk, linestore::DecodedChunk& out) const {
   const auto [file, local] = boxes_[box].chunks[chunk];
   Readers& readers = readers_.local();

@@ -77,6 +77,8 @@ class BoxStore {
   uint64_t bytes() const { return total(&StoreBox::bytes); }
   // Per mesh face: crossings by the lines of the box it belongs to.
   std::vector<double> face_crossings(size_t faces) const;
+  // Per mesh face: crossed by the lines of any box.
+  std::vector<bool> faces_crossed(size_t faces) const;
 
   // Reads a chunk with the calling thread's readers, which stay open from
   // pass to pass (a thread runs one chunk at a time).

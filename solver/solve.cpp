@@ -83,7 +83,7 @@ void run_iterations(const Options& options, const PatchMesh& mesh, const Tracer&
 
 // The energy balance and what is left to distribute, in the log; a run
 // stopped by the iteration cap is a warning, in the report too.
-void log_remaining(const Options& options, const BoxStore* store, const RadiosityState& state,
+void log_remaining(const Options& options, const PatchMesh& mesh, const BoxStore* store, const RadiosityState& state,
                    const IterationLog& log, std::vector<std::string>& warnings) {
   const double e = state.emitted_total();
   spdlog::info("energy: unshot {:.3e} and held in ARs {:.3e} of emitted, balance residual {:.2e} (relative)",
@@ -94,6 +94,26 @@ void log_remaining(const Options& options, const BoxStore* store, const Radiosit
                  "({:.2e}); no stored line can carry {:.2e} (faces {:.2e}, ARs {:.2e})",
                  r.unshot / e, r.in / e, r.out / e, r.deepest_box, r.deepest_power / e,
                  (r.stuck_faces + r.stuck_in + r.stuck_out) / e, r.stuck_faces / e, (r.stuck_in + r.stuck_out) / e);
+  }
+  // Faces no stored line crosses never receive power from the stored lines
+  // (only the first shot's): their reflected radiosity is missing.
+  if (store) {
+    const std::vector<bool> crossed = store->faces_crossed(mesh.face_count());
+    size_t missed = 0;
+    double area = 0, total = 0;
+    for (size_t f = 0; f < crossed.size(); ++f) {
+      total += mesh.face_area(static_cast<int>(f));
+      if (crossed[f]) continue;
+      ++missed;
+      area += mesh.face_area(static_cast<int>(f));
+    }
+    if (missed > 0) {
+      warnings.push_back(fmt::format(
+          "{} face(s) ({:.3g} % of the area) are crossed by no stored line: they receive only the first shot's light, "
+          "so their reflected radiosity is too low; use more lines.total or a larger mesh.max_patch_area",
+          missed, 100.0 * area / total));
+      spdlog::warn("{}", warnings.back());
+    }
   }
   if (!log.converged) {
     warnings.push_back(fmt::format(
@@ -163,7 +183,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, mesh, record.threads)};
   start_state(options, flags, mesh, tracer, store.get(), checkpoint, state, record);
   run_iterations(options, mesh, tracer, store.get(), checkpoint, state, record);
-  log_remaining(options, store.get(), state, record.iterations, record.warnings);
+  log_remaining(options, mesh, store.get(), state, record.iterations, record.warnings);
   write_outputs(options, mesh, tracer, state, record);
 
   record.timings.total = seconds_since(start);

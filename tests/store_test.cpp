@@ -193,6 +193,28 @@ TEST(Store, TemporariesOfKilledRunsAreRemovedByTheNextRun) {
   EXPECT_TRUE(std::filesystem::exists(dir / "out/report.json"));
 }
 
+// Faces no stored line crosses (a millimetre cube in a kilometre room at
+// 100k lines) get only the first shot's light: report.json says so.
+TEST(Store, FacesNoStoredLineCrossesAreAWarning) {
+  TempDir dir;
+  Scene scene;
+  const int black = test::add_material(scene, "black", 0.0, 0.0);
+  const int lamp = test::add_material(scene, "lamp", 0.5, 1.0);
+  test::add_box(scene, {-500, -500, -500}, {500, 500, 500}, true, black, test::add_object(scene, "room"));
+  test::add_box(scene, {3, 2, 1}, {3.001, 2.001, 1.001}, false, lamp, test::add_object(scene, "cube"));
+  const auto obj = test::write_obj(scene, dir / "tiny");
+  test::write_file(dir / "tiny.toml", "[scene]\nfile = \"" + obj.string() + "\"\n[mesh]\nmax_patch_area = 1e9\n");
+  const std::string args = " -q solver.method=multipath lines.total=100000 first_shot.lines=10000 store.dir=" +
+                           (dir / "store").string() + " output.dir=" + (dir / "out").string() + " output.png=false";
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + (dir / "tiny.toml").string() + args).exit_code, 0);
+  const RunResult r = test::run(test::solve_bin() + " " + (dir / "tiny.toml").string() + args);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto report = nlohmann::json::parse(test::read_file(dir / "out/report.json"));
+  bool found = false;
+  for (const auto& w : report["warnings"]) found |= w.get<std::string>().find("6 face(s)") == 0;
+  EXPECT_TRUE(found) << report["warnings"].dump();
+}
+
 TEST(Store, DamagedOrMismatchedStoresAreRefusedByName) {
   TempDir dir;
   const std::string store = (dir / "store").string();
