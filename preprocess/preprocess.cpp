@@ -105,7 +105,10 @@ bool merge_parts(const fs::path& dir, const ShardSpec& shard, linestore::Manifes
     const fs::path record = part_manifest(dir, {i, shard.count});
     if (!fs::exists(record)) return false;
     const linestore::Manifest part = linestore::read_manifest(record);
-    if (!linestore::identity_mismatch(merged.identity, part.identity).empty()) return false;
+    if (const std::string mismatch = linestore::identity_mismatch(merged.identity, part.identity); !mismatch.empty())
+      throw InputError(fmt::format("{}: shard {} of {} was made with another scene or config ({}); the store cannot be "
+                                   "completed: run that shard again with this config", record.string(), i, shard.count,
+                                   mismatch));
     merged.files.insert(merged.files.end(), part.files.begin(), part.files.end());
   }
   linestore::write_manifest(dir / "manifest.json", merged);
