@@ -105,10 +105,14 @@ bool merge_parts(const fs::path& dir, const ShardSpec& shard, linestore::Manifes
     const fs::path record = part_manifest(dir, {i, shard.count});
     if (!fs::exists(record)) return false;
     const linestore::Manifest part = linestore::read_manifest(record);
-    if (const std::string mismatch = linestore::identity_mismatch(merged.identity, part.identity); !mismatch.empty())
-      throw InputError(fmt::format("{}: shard {} of {} was made with another scene or config ({}); the store cannot be "
-                                   "completed: run that shard again with this config", record.string(), i, shard.count,
-                                   mismatch));
+    // Another shard of another config (an earlier run's, or one still to be
+    // run again): the store is not complete, and the log says why. Not an
+    // error: in a job array that shard may be running again right now.
+    if (const std::string mismatch = linestore::identity_mismatch(merged.identity, part.identity); !mismatch.empty()) {
+      spdlog::warn("{}: shard {} of {} was made with another scene or config ({}); the store is complete once that "
+                   "shard has run again with this config", record.string(), i, shard.count, mismatch);
+      return false;
+    }
     merged.files.insert(merged.files.end(), part.files.begin(), part.files.end());
   }
   linestore::write_manifest(dir / "manifest.json", merged);
