@@ -12,13 +12,20 @@
 
 namespace mpath::fuzz {
 
+// The process's folder for inputs, removed when the process ends.
 inline const std::filesystem::path& folder() {
-  static const std::filesystem::path dir = [] {
-    auto d = std::filesystem::temp_directory_path() / ("mpath-fuzz-" + std::to_string(getpid()));
-    std::filesystem::create_directories(d);
-    return d;
-  }();
-  return dir;
+  struct Folder {
+    std::filesystem::path path;
+    Folder() : path(std::filesystem::temp_directory_path() / ("mpath-fuzz-" + std::to_string(getpid()))) {
+      std::filesystem::create_directories(path);
+    }
+    ~Folder() {
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
+    }
+  };
+  static const Folder dir;
+  return dir.path;
 }
 
 inline std::filesystem::path write_input(const std::string& name, const uint8_t* data, size_t size) {
