@@ -101,6 +101,21 @@ TEST(SceneLoader, AppliesConfigEmittersAndTwoSidedMaterialsByName) {
   }
 }
 
+// A polygon given twice (either way round) is a warning with the count.
+TEST(SceneLoader, WarnsOfDuplicatedPolygons) {
+  TempDir dir;
+  write_file(dir / "d.mtl", "newmtl light\nKd 0.5 0.5 0.5\n");
+  write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
+                            "f 1 2 3 4\nf 4 3 2 1\nf 2 3 4 1\nf 1 2 5\n");
+  SceneOptions o;
+  o.file = dir / "d.obj";
+  o.emitters["light"] = {1, 1, 1};
+  std::vector<std::string> w;
+  load_scene(o, 16, w);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0].find("2 polygon(s) have the same vertices as another"), 0u) << w[0];
+}
+
 TEST(SceneLoader, RejectsUnknownFormatsMissingFilesAndDarkScenes) {
   TempDir dir;
   SceneOptions o;

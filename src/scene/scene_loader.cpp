@@ -1,7 +1,10 @@
 // Picks the reader by file extension and applies the configured material overrides.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
+#include <set>
+#include <vector>
 
 #include "error.h"
 #include "scene_readers.h"
@@ -52,6 +55,25 @@ static void check_extent(const Scene& scene) {
                                  "the file's units)", scene.file.string(), size, kMinSceneSize, kMaxSceneSize));
 }
 
+// Polygons whose vertex set (in any order, rounded to 1e-9 of the scene)
+// is another's.
+static size_t repeated_polygons(const Scene& scene) {
+  const Bounds bounds = scene.bounds();
+  const double grid = 1e-9 * std::max(bounds.diagonal(), 1e-30);  // offsets from the corner stay below 1e9 steps
+  std::set<std::vector<std::array<long long, 3>>> seen;
+  size_t repeated = 0;
+  for (const Polygon& p : scene.polygons) {
+    std::vector<std::array<long long, 3>> key;
+    key.reserve(p.vertices.size());
+    for (const Vec3& v : p.vertices)
+      key.push_back({std::llround((v.x - bounds.lo.x) / grid), std::llround((v.y - bounds.lo.y) / grid),
+                     std::llround((v.z - bounds.lo.z) / grid)});
+    std::sort(key.begin(), key.end());
+    if (!seen.insert(std::move(key)).second) ++repeated;
+  }
+  return repeated;
+}
+
 Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<std::string>& warnings) {
   const auto& path = options.file;
   std::string ext = path.extension().string();
@@ -77,6 +99,10 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
       throw InputError(fmt::format("{}: polygon {} has {} vertices; mpath takes at most {} (split it into smaller ones)",
                                    path.string(), i + 1, scene.polygons[i].vertices.size(), kMaxPolygonVertices));
   check_extent(scene);
+  if (const size_t repeated = repeated_polygons(scene); repeated > 0)
+    warnings.push_back(fmt::format(
+        "{} polygon(s) have the same vertices as another (duplicated faces): coincident surfaces are seen by "
+        "chance by the lines and the methods light them differently; remove the duplicates", repeated));
   const bool any_emitter = std::any_of(scene.polygons.begin(), scene.polygons.end(),
                                        [&](const Polygon& p) { return scene.materials[p.material].emits(); });
   if (!any_emitter)
