@@ -279,10 +279,7 @@ void BoxStore::open_files(const fs::path& dir, const fs::path& manifest_path) {
   for (const linestore::StoreFile& f : files) {
     const fs::path path = dir / f.name;
     if (f.box >= boxes_.size()) throw InputError(fmt::format("{}: box {} is not in the store's hierarchy", path.string(), f.box));
-    if (!fs::exists(path)) throw InputError(fmt::format("{}: missing (listed in {})", path.string(), manifest_path.string()));
-    if (fs::file_size(path) != f.bytes)
-      throw InputError(fmt::format("{}: {} bytes, the manifest says {} (truncated or from another run)", path.string(),
-                                   fs::file_size(path), f.bytes));
+    // (Its name, size and hash were checked by verify_files.)
     StoreBox& box = boxes_[f.box];
     if (f.first_line != next_line[f.box])
       throw InputError(fmt::format("{}: starts at line {}, expected {} (a shard is missing)", path.string(), f.first_line,

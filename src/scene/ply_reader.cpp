@@ -16,6 +16,7 @@
 
 #include "error.h"
 #include "scene_readers.h"
+#include "text_tokenizer.h"
 
 namespace mpath {
 
@@ -192,7 +193,7 @@ std::vector<int> connected_components(const Faces& faces, size_t vertex_count) {
 }  // namespace
 
 Scene read_ply(const fs::path& path) {
-  if (!fs::exists(path)) throw InputError(fmt::format("{}: file not found", path.string()));
+  require_scene_file(path);
   std::ifstream in(path, std::ios::binary);
   const std::string name = path.string();
   const Header header = read_header(in, name);

@@ -78,9 +78,6 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
   const auto& path = options.file;
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  std::error_code ec;
-  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
-    throw InputError(fmt::format("{}: not a regular file (a folder, device or pipe cannot be a scene file)", path.string()));
   Scene scene;
   if (ext == ".obj") scene = read_obj(path);
   else if (ext == ".ply") scene = read_ply(path);

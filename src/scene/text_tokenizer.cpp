@@ -7,11 +7,15 @@
 
 namespace mpath {
 
-TextTokenizer::TextTokenizer(const std::filesystem::path& path) : path_(path.string()) {
-  if (!std::filesystem::exists(path)) throw InputError(fmt::format("{}: file not found", path_));
+void require_scene_file(const std::filesystem::path& path) {
   std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(fmt::format("{}: file not found", path.string()));
   if (!std::filesystem::is_regular_file(path, ec))
-    throw InputError(fmt::format("{}: not a regular file (a folder, device or pipe cannot be a scene file)", path_));
+    throw InputError(fmt::format("{}: not a regular file (a folder, device or pipe cannot be a scene file)", path.string()));
+}
+
+TextTokenizer::TextTokenizer(const std::filesystem::path& path) : path_(path.string()) {
+  require_scene_file(path);
   in_.open(path);
   if (!in_) throw InputError(fmt::format("{}: cannot open file", path_));
 }

@@ -10,6 +10,10 @@
 
 namespace mpath {
 
+// Throws InputError unless `path` is an existing regular file (a folder, a
+// device such as /dev/zero or a pipe cannot be a scene file).
+void require_scene_file(const std::filesystem::path& path);
+
 class TextTokenizer {
  public:
   // Throws InputError when the file cannot be opened.
