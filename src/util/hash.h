@@ -65,6 +65,12 @@ class StreamHash {
   StreamHash() : buffer_(kBlock, '\0') {}
   void add(const void* data, size_t size) {
     const auto* p = static_cast<const char*>(data);
+    // Whole blocks are hashed where they lie (a file read a MiB at a time
+    // is not copied again).
+    for (; used_ == 0 && size >= kBlock; p += kBlock, size -= kBlock) {
+      const uint64_t block = block_hash(reinterpret_cast<const unsigned char*>(p), kBlock);
+      h_.add(&block, sizeof block);
+    }
     while (size > 0) {
       const size_t n = std::min(size, kBlock - used_);
       std::memcpy(buffer_.data() + used_, p, n);
