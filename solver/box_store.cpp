@@ -353,8 +353,10 @@ uint64_t BoxStore::total(uint64_t StoreBox::*field) const {
 
 std::vector<double> BoxStore::face_crossings(size_t faces) const {
   std::vector<double> out(faces, 0.0);
+  // A face of a transparent hierarchy is in every box above it too, and all
+  // their lines carry its power: its crossings are theirs summed.
   for (const StoreBox& b : boxes_)
-    for (size_t f = 0; f < b.face_global.size(); ++f) out[b.face_global[f]] = b.face_crossings[f];
+    for (size_t f = 0; f < b.face_global.size(); ++f) out[b.face_global[f]] += b.face_crossings[f];
   return out;
 }
 

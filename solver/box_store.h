@@ -75,7 +75,7 @@ class BoxStore {
   uint64_t lines() const { return total(&StoreBox::lines); }
   uint64_t events() const { return total(&StoreBox::events); }
   uint64_t bytes() const { return total(&StoreBox::bytes); }
-  // Per mesh face: crossings by the lines of the box it belongs to.
+  // Per mesh face: crossings by the lines of every box that holds it.
   std::vector<double> face_crossings(size_t faces) const;
   // Per mesh face: crossed by the lines of any box.
   std::vector<bool> faces_crossed(size_t faces) const;

@@ -160,22 +160,21 @@ struct EntryInput {
   double quota[3] = {0, 0, 0};  // the class's power in flight
   double share = 0;             // of it, what one carrying crossing sends
   double expected = 0;          // a part of the lines: the share of the quota the pass may send in all
-  double alpha = 0;             // the class's share of what the face receives
 };
 struct FaceIn {
   double rho[3] = {0, 0, 0};
   uint32_t entry = 0, carried = 0;  // its entries, and how many
-  bool later = false;               // it has classes above the box
+  double carried_share = 1;         // the shares of those classes, summed (1 when none is above the box)
 };
 
 // A shard's private accumulators for one box's pass.
-struct alignas(32) EntryAcc {
-  double gathered[3] = {0, 0, 0};  // received, sent on along the next crossing of its class
-  double used = 0;                 // fraction of the quota sent
+struct EntryAcc {
+  double used = 0;  // fraction of the quota sent
 };
 struct FaceAcc {
   double phi_gain[3] = {0, 0, 0};
-  double later[3] = {0, 0, 0};  // received, for the classes of boxes above this one
+  double gathered[3] = {0, 0, 0};  // received, for the classes the box carries: sent on along the next crossing
+  double later[3] = {0, 0, 0};     // received, for the classes of boxes above this one
 };
 struct alignas(128) SetShard {
   std::vector<EntryAcc> entries;
@@ -220,14 +219,15 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       const uint32_t e = in.faces[face].entry + static_cast<uint32_t>(k);
       const EntryInput& input = in.entries[e];
       EntryAcc& acc = shard.entries[e];
+      FaceAcc& fa = shard.faces[face];
       double share = input.share;
       if (in.capped) share = std::max(0.0, std::min(share, input.expected * shard.allowance - acc.used));
       acc.used += share;
       SetShard::Send s{i, dir, {0, 0, 0}};
       bool any = false;
       for (int c = 0; c < ch; ++c) {
-        s.power[c] = input.quota[c] * share + acc.gathered[c];
-        acc.gathered[c] = 0;
+        s.power[c] = input.quota[c] * share + fa.gathered[c];
+        fa.gathered[c] = 0;
         any |= s.power[c] != 0;
       }
       if (any) sends.push_back(s);
@@ -244,24 +244,19 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       continue;
     }
     // rho of it stays, shared by the face's classes: those this box carries
-    // are sent on in this pass, the rest waits for the boxes above.
+    // go on together along the face's next crossing in this pass (any of
+    // them: the box's lines sample the face's partners in the box as its
+    // form factor does), the rest waits for the boxes above.
     const FaceIn& f = in.faces[face];
     FaceAcc& fa = shard.faces[face];
-    double kept[3];
     for (int c = 0; c < ch; ++c) {
-      kept[c] = f.rho[c] * s.power[c];
-      fa.phi_gain[c] += kept[c];
-      shard.absorbed[c] += s.power[c] - kept[c];
+      const double kept = f.rho[c] * s.power[c];
+      fa.phi_gain[c] += kept;
+      shard.absorbed[c] += s.power[c] - kept;
+      const double now = kept * f.carried_share;
+      fa.gathered[c] += now;
+      fa.later[c] += kept - now;
     }
-    double sent_on = 0;
-    for (uint32_t k = 0; k < f.carried; ++k) {
-      const double a = in.entries[f.entry + k].alpha;
-      EntryAcc& acc = shard.entries[f.entry + k];
-      for (int c = 0; c < ch; ++c) acc.gathered[c] += kept[c] * a;
-      sent_on += a;
-    }
-    if (f.later)
-      for (int c = 0; c < ch; ++c) fa.later[c] += kept[c] * (1.0 - sent_on);
   }
 }
 
@@ -270,11 +265,13 @@ struct SetResult {
   BoxPassStats stats;
 };
 
-// Adds `amount` to the pools of a face's classes from `from` on, in
-// proportion to their shares (the last takes what rounding leaves).
-void pool_classes(const LineSets& sets, size_t face, uint32_t from, int ch, int c, double amount,
+// Adds `amount` to the pools of a face's classes [from, to) (to = -1: up to
+// the root's), in proportion to their shares (the last takes what rounding
+// leaves, and all of it when none has a share).
+void pool_classes(const LineSets& sets, size_t face, uint32_t from, int to, int ch, int c, double amount,
                   std::vector<double>& pooled) {
-  const uint32_t slot0 = sets.face_slot[face], end = sets.face_slot[face + 1];
+  const uint32_t slot0 = sets.face_slot[face];
+  const uint32_t end = to < 0 ? sets.face_slot[face + 1] : slot0 + static_cast<uint32_t>(to);
   double total = 0;
   uint32_t last = end;
   for (uint32_t s = slot0 + from; s < end; ++s)
@@ -282,7 +279,7 @@ void pool_classes(const LineSets& sets, size_t face, uint32_t from, int ch, int 
       total += sets.alpha[s];
       last = s;
     }
-  if (last == end) last = end - 1;  // no share above: the root's class keeps it
+  if (last == end) last = end - 1;
   double given = 0;
   for (uint32_t s = slot0 + from; s < end; ++s) {
     if (s != last && !(sets.alpha[s] > 0)) continue;
@@ -319,7 +316,6 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     for (int c = 0; c < ch; ++c) input.quota[c] = flight.quota[size_t{slot} * ch + c];
     input.share = flight.share[slot];
     input.expected = flight.fraction[x] * lines.carried[e] * flight.share[slot];
-    input.alpha = sets.alpha[slot];
   }
   in.faces.resize(faces);
   for (size_t f = 0; f < faces; ++f) {
@@ -328,7 +324,10 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     for (int c = 0; c < ch; ++c) face.rho[c] = state.rho[state.at(g, c)];
     face.entry = lines.entry[f];
     face.carried = lines.entry[f + 1] - lines.entry[f];
-    face.later = face.carried < sets.face_slot[g + 1] - sets.face_slot[g];
+    if (face.carried < sets.face_slot[g + 1] - sets.face_slot[g]) {
+      face.carried_share = 0;
+      for (uint32_t k = 0; k < face.carried; ++k) face.carried_share += sets.alpha[sets.face_slot[g] + k];
+    }
   }
   const uint64_t chunks = parts.size();
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
@@ -349,26 +348,26 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
           (ch == 1 ? transport_set_line<1> : transport_set_line<3>)(in, ev, m, a);
         });
   });
-  // Merge in shard order: the quota sent, what each class gathered and did
-  // not send (back to its pool), what waits for the boxes above.
+  // Merge in shard order: the quota sent; what was gathered and not sent
+  // goes to the pools of the classes this box carries, what waits for the
+  // boxes above to theirs.
   SetResult result;
   for (size_t f = 0; f < faces; ++f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
     const FaceIn& face = in.faces[f];
     for (uint32_t k = 0; k < face.carried; ++k) {
       const uint32_t e = face.entry + k, slot = lines.slot[e];
-      for (const SetShard& a : acc) {
-        flight.used[slot] += a.entries[e].used;
-        for (int c = 0; c < ch; ++c) state.pooled[size_t{slot} * ch + c] += a.entries[e].gathered[c];
-      }
+      for (const SetShard& a : acc) flight.used[slot] += a.entries[e].used;
     }
     for (int c = 0; c < ch; ++c) {
-      double later = 0;
+      double gathered = 0, later = 0;
       for (const SetShard& a : acc) {
         state.phi[state.at(g, c)] += a.faces[f].phi_gain[c];
+        gathered += a.faces[f].gathered[c];
         later += a.faces[f].later[c];
       }
-      if (later != 0) pool_classes(sets, g, face.carried, ch, c, later, state.pooled);
+      if (gathered != 0) pool_classes(sets, g, 0, static_cast<int>(face.carried), ch, c, gathered, state.pooled);
+      if (later != 0) pool_classes(sets, g, face.carried, -1, ch, c, later, state.pooled);
     }
   }
   for (const SetShard& a : acc) {
@@ -394,7 +393,7 @@ void assign_unshot(const LineSets& sets, RadiosityState& state) {
     for (int c = 0; c < ch; ++c) {
       double& u = state.unshot[state.at(f, c)];
       if (u == 0) continue;
-      pool_classes(sets, f, 0, ch, c, u, state.pooled);
+      pool_classes(sets, f, 0, -1, ch, c, u, state.pooled);
       u = 0;
     }
   }
@@ -441,7 +440,10 @@ PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const 
   Flight flight;
   flight.quota.assign(sets.slots() * ch, 0.0);
   flight.used.assign(sets.slots(), 0.0);
-  plan_iteration(store, sets, state, power_per_line, pass, flight);
+  // Lines in the order of stored-line Multipath's pass (its rotation 2 pass):
+  // with no line in the subscenes, the two transports are the same sums.
+  const unsigned rotation = 2 * pass;
+  plan_iteration(store, sets, state, power_per_line, rotation, flight);
   // Deepest boxes first, the root last. Boxes of one depth hold disjoint
   // faces and run in parallel.
   std::vector<std::vector<int>> at_depth(h.max_depth() + 1);
@@ -454,7 +456,7 @@ PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const 
     const std::vector<int>& boxes = at_depth[d];
     std::vector<SetResult> results(boxes.size());
     tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t k) {
-      results[k] = set_pass(store, sets, boxes[k], state, flight, threads, pass, progress);
+      results[k] = set_pass(store, sets, boxes[k], state, flight, threads, rotation, progress);
     });
     for (size_t k = 0; k < boxes.size(); ++k) {
       for (int c = 0; c < ch; ++c) {
