@@ -214,9 +214,12 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
     for (const int dir : {+1, -1}) {
       const int face = face_towards(box, ev[i], dir);
       if (face < 0) continue;
-      const int k = pair_class(sets, lines, in.root, ev, n, i, i + dir);
+      const FaceIn& from = in.faces[face];
+      // A face of the box's own (one class here) needs no look-up of its partner's box.
+      const int k = from.carried == 1 ? (in.root || (i + dir >= 0 && i + dir < n) ? 0 : -1)
+                                      : pair_class(sets, lines, in.root, ev, n, i, i + dir);
       if (k < 0) continue;
-      const uint32_t e = in.faces[face].entry + static_cast<uint32_t>(k);
+      const uint32_t e = from.entry + static_cast<uint32_t>(k);
       const EntryInput& input = in.entries[e];
       EntryAcc& acc = shard.entries[e];
       FaceAcc& fa = shard.faces[face];
@@ -410,10 +413,13 @@ void plan_iteration(const BoxStore& store, const LineSets& sets, const Radiosity
   flight.parts.assign(boxes, {});
   double power = 0;
   for (double p : state.pooled) power += p;
+  // The root's lines carry every class too, so a subscene needs no floor of
+  // its own: every box takes at least the root's share of its lines.
+  const double coverage = store.box(0).coverage;
   for (size_t x = 0; x < boxes; ++x) {
     const StoreBox& box = store.box(static_cast<int>(x));
     if (power_per_line > 0 && box.lines > 0)
-      flight.fraction[x] = std::clamp(power / (power_per_line * static_cast<double>(store.lines())), box.coverage, 1.0);
+      flight.fraction[x] = std::clamp(power / (power_per_line * static_cast<double>(store.lines())), coverage, 1.0);
     flight.parts[x] = pass_parts(store, static_cast<int>(x), flight.fraction[x], pass);
     if (flight.fraction[x] < 1.0 && box.lines > 0) {
       uint64_t lines = 0;
