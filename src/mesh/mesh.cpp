@@ -47,7 +47,7 @@ class MeshBuilder {
       ++mesh_.dropped_polygons;
       return;
     }
-    current_ = {index, poly.object, poly.material, newell / (2.0 * area)};
+    current_ = {index, poly.object, poly.material, newell / (2.0 * area), eps};
     const double max_area = mesh_.max_patch_area;
     if (is_parallelogram(p, eps)) {
       add_grid(p, max_area);
@@ -63,6 +63,7 @@ class MeshBuilder {
   struct Current {
     int polygon, object, material;
     Vec3 normal;
+    double eps;
   };
 
   uint32_t add_vertices(const std::vector<Vec3>& p) {
@@ -77,6 +78,9 @@ class MeshBuilder {
     std::vector<Vec3> corners{mesh_.vertices[v[0]], mesh_.vertices[v[1]], mesh_.vertices[v[2]]};
     if (v[3] != v[2]) corners.push_back(mesh_.vertices[v[3]]);
     patch.area = polygon_area(corners);
+    // A sliver of a triangulation (corners on one line, as along a keyhole
+    // seam) has no area and receives no light: it is no patch.
+    if (!(patch.area > current_.eps * current_.eps)) return;
     patch.normal = current_.normal;
     patch.polygon = current_.polygon;
     patch.object = current_.object;
@@ -176,6 +180,9 @@ std::vector<std::array<uint32_t, 3>> triangulate(const std::vector<Vec3>& polygo
       bool empty = true;
       for (uint32_t k : idx) {
         if (k == a || k == b || k == c) continue;
+        // A corner repeated where a polygon runs to a hole and back (a
+        // keyhole seam) lies on the ear's corner, not in it.
+        if (q[k] == q[a] || q[k] == q[b] || q[k] == q[c]) continue;
         if (orientation * cross2(q[a], q[b], q[k]) >= 0 && orientation * cross2(q[b], q[c], q[k]) >= 0 &&
             orientation * cross2(q[c], q[a], q[k]) >= 0) {
           empty = false;

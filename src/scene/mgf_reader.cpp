@@ -46,6 +46,14 @@ struct Entry {
   long line = 0;
 };
 
+// A line the reader skips with a warning (as the reference parser goes on
+// after an unknown entity): malformed arguments, undefined names. Limits and
+// unreadable files stay errors.
+class SkippedLine : public InputError {
+ public:
+  explicit SkippedLine(const InputError& e) : InputError(e.what()) {}
+};
+
 struct XfFrame {
   Transform total;       // transform in force inside this context
   size_t body_start = 0; // first entry after the xf line (for arrays)
@@ -77,15 +85,43 @@ class MgfReader {
     path_ = path.string();
     for (size_t i = 0; i < entries.size(); ++i) {
       line_ = entries[i].line;
-      i = execute(entries[i].t, path, i, depth);
+      try {
+        i = execute(entries[i].t, path, i, depth);
+      } catch (const SkippedLine& e) {
+        if (skipped_++ < kSkippedShown) skipped_lines_.push_back(e.what());
+      }
       path_ = path.string();
     }
-    if (xf_.size() != xf_depth) fail("'xf' context left open at end of file");
+    if (xf_.size() > xf_depth) {
+      if (skipped_++ < kSkippedShown)
+        skipped_lines_.push_back(fmt::format("{}: 'xf' context left open at end of file (closed there)", path_));
+      xf_.resize(xf_depth);
+    }
     file_ = saved_file;
   }
 
+  // What was skipped, for the run's warnings: each unknown entity once with
+  // its count, the malformed lines counted with the first few named.
+  void skipped_warnings(std::vector<std::string>& out) const {
+    for (const auto& [entity, seen] : unknown_)
+      out.push_back(fmt::format("MGF: entity '{}' not read, {} line(s) skipped, the first at {}", entity, seen.count,
+                                seen.first));
+    if (skipped_ > 0) {
+      std::string shown;
+      for (const auto& s : skipped_lines_) shown += "; " + s;
+      out.push_back(fmt::format("MGF: {} malformed line(s) skipped{}{}", skipped_, shown,
+                                skipped_ > skipped_lines_.size() ? "; ..." : ""));
+    }
+    for (const auto& name : ones_)
+      out.push_back(fmt::format("material '{}' reflects all the light it receives (rd 1): where such surfaces close "
+                                "the scene the solve cannot converge and stops at solver.iterations", name));
+  }
+
  private:
-  [[noreturn]] void fail(const std::string& msg) const { throw file_error(path_, line_, msg); }
+  // A malformed line: skipped with a warning.
+  [[noreturn]] void fail(const std::string& msg) const { throw SkippedLine(file_error(path_, line_, msg)); }
+  // A limit or an unreadable file: the scene is refused.
+  [[noreturn]] void refuse(const std::string& msg) const { throw file_error(path_, line_, msg); }
 
   double number(const std::string& s, std::string_view what) const {
     double v = 0;
@@ -146,22 +182,28 @@ class MgfReader {
     else if (k == "o") {
       if (t.size() > 2) fail("malformed 'o': expected 'o [name]'");
       if (t.size() == 2 && objects_.size() >= kMaxObjectDepth)
-        fail(fmt::format("objects nested more than {} deep ('o' without its closing 'o'?)", kMaxObjectDepth));
+        refuse(fmt::format("objects nested more than {} deep ('o' without its closing 'o'?)", kMaxObjectDepth));
       if (t.size() == 2) objects_.push_back({t[1], -1});
       else if (objects_.empty()) fail("'o' end without a matching 'o name'");
       else objects_.pop_back();
     } else if (k == "xf") return transform_entity(t, i);
     else if (k == "i") include(t, path, depth);
     else if (k == "f") face(t);
-    else if (k == "fh") fail("faces with holes ('fh') are not supported; split the face into simple polygons");
+    else if (k == "fh") unsupported("fh (faces with holes: split them into simple polygons)");
     else if (k == "sph") primitive_sphere(t);
     else if (k == "cyl" || k == "cone") primitive_cone(t);
     else if (k == "ring") primitive_ring(t);
     else if (k == "torus") primitive_torus(t);
     else if (k == "prism") primitive_prism(t);
-    else if (k == "ies") fail("IES luminaires ('ies') are not supported; model the emitter with 'ed'");
-    else fail(fmt::format("unknown MGF entity '{}'", k));
+    else if (k == "ies") unsupported("ies (IES luminaires: model the emitter with 'ed')");
+    else unsupported(k.size() > 40 ? k.substr(0, 40) + "..." : k);
     return i;
+  }
+
+  // An entity mpath does not read (unknown, or not supported): counted, named once.
+  void unsupported(const std::string& entity) {
+    auto& seen = unknown_[entity];
+    if (seen.count++ == 0) seen.first = fmt::format("{}:{}", path_, line_);
   }
 
   // c/m: "c" (unnamed default), "c id" (use, creating if new), "c id =" (reset), "c id = template".
@@ -260,7 +302,7 @@ class MgfReader {
       for (const XfFrame& open : xf_)
         for (int n : open.counts) copies *= n;
       for (int n : frame.counts) copies *= n;
-      if (copies > 1e7) fail(fmt::format("nested 'xf -a' arrays make {:.3g} copies (at most 1e7)", copies));
+      if (copies > 1e7) refuse(fmt::format("nested 'xf -a' arrays make {:.3g} copies (at most 1e7)", copies));
       frame.total = transform().after(parse_transform(frame.args, frame.index));
       xf_.push_back(std::move(frame));
       return i;
@@ -347,10 +389,10 @@ class MgfReader {
     if (t.size() < 2) fail("malformed 'i': expected 'i file [xf arguments]'");
     fs::path file = t[1];
     if (file.is_relative()) file = path.parent_path() / file;
-    if (!fs::exists(file)) fail(fmt::format("included file '{}' not found", file.string()));
+    if (!fs::exists(file)) refuse(fmt::format("included file '{}' not found", file.string()));
     // Includes that include each other twice over read 2^depth files: bounded.
     if (++includes_read_ > kMaxIncludeReads)
-      fail(fmt::format("more than {} files read through 'i' (includes that fan out or loop?)", kMaxIncludeReads));
+      refuse(fmt::format("more than {} files read through 'i' (includes that fan out or loop?)", kMaxIncludeReads));
     const std::vector<std::string> args(t.begin() + 2, t.end());
     if (!array_counts(args).empty()) fail("'-a' arrays are supported in 'xf', not in 'i'");
     const bool has_xf = !args.empty();
@@ -395,14 +437,17 @@ class MgfReader {
     for (int c = 0; c < 3; ++c) {
       mat.rho[c] = rho[c];
       mat.emission[c] = std::max(0.0, exitance[c]) / std::numbers::pi;
-      if (rho[c] < 0 || rho[c] >= 1.0) {
+      if (rho[c] < 0 || rho[c] > 1.0 + 1e-9) {
         // Saturated colours can leave the RGB gamut: keep them physical and say so.
         mat.rho[c] = std::clamp(rho[c], 0.0, 0.99);
         gamut_warnings_.insert(mat.name);
+      } else {
+        mat.rho[c] = std::fabs(rho[c] - 1.0) <= 1e-9 ? 1.0 : rho[c];  // rd 1 in white is 1, not 1 -+ rounding
       }
     }
     mat.two_sided = m.sides == 2;
-    if (m.rd < 0 || m.rd >= 1) fail(fmt::format("material '{}': reflectance rd {} is outside [0, 1)", mat.name, m.rd));
+    if (m.rd < 0 || m.rd > 1) fail(fmt::format("material '{}': reflectance rd {} is outside [0, 1]", mat.name, m.rd));
+    if (m.rd == 1) ones_.insert(mat.name);
     const auto key = std::make_tuple(mat.name, mat.rho, mat.emission, mat.two_sided);
     auto it = material_index_.find(key);
     if (it != material_index_.end()) return it->second;
@@ -421,7 +466,7 @@ class MgfReader {
 
   void add_world_polygon(std::vector<Vec3> vertices) {
     if (scene_.polygons.size() >= kMaxPolygons)
-      fail(fmt::format("more than {} polygons (runaway 'xf -a' arrays or includes?)", kMaxPolygons));
+      refuse(fmt::format("more than {} polygons (runaway 'xf -a' arrays or includes?)", kMaxPolygons));
     Polygon poly;
     poly.vertices = std::move(vertices);
     poly.material = current_scene_material();
@@ -493,6 +538,17 @@ class MgfReader {
   std::set<std::string> gamut_warnings_;
 
  private:
+  static constexpr size_t kSkippedShown = 3;
+  struct Unknown {
+    size_t count = 0;
+    std::string first;
+  };
+  std::map<std::string, Unknown> unknown_;
+  size_t skipped_ = 0;
+  std::vector<std::string> skipped_lines_;
+  std::set<std::string> ones_;
+
+ private:
   Scene& scene_;
   int segments_;
   int default_sides_;
@@ -524,6 +580,12 @@ Scene read_mgf(const fs::path& path, int curve_segments, int default_sides, std:
   scene.file = path;
   MgfReader reader(scene, curve_segments, default_sides);
   reader.read_file(path, 0);
+  std::vector<std::string> skipped;
+  reader.skipped_warnings(skipped);
+  // Nothing usable left: the error says what was skipped.
+  if (scene.polygons.empty() && !skipped.empty())
+    throw InputError(fmt::format("{}: no polygon could be read ({})", path.string(), skipped.front()));
+  if (warnings) warnings->insert(warnings->end(), skipped.begin(), skipped.end());
   if (warnings)
     for (const auto& name : reader.gamut_warnings_)
       warnings->push_back(fmt::format("material '{}': colour outside the RGB gamut, reflectance clamped to [0, 0.99]", name));

@@ -19,7 +19,8 @@ Rgb read_rgb(const TextTokenizer& in, const std::vector<std::string_view>& t) {
   return {r, in.number(t[2], t[0]), in.number(t[3], t[0])};
 }
 
-void read_mtl(const fs::path& path, Scene& scene, std::map<std::string, std::string>& defined_at) {
+void read_mtl(const fs::path& path, Scene& scene, std::map<std::string, std::string>& defined_at,
+              std::map<std::string, std::string>& see_through) {
   TextTokenizer in(path);
   std::vector<std::string_view> t;
   Material* current = nullptr;
@@ -41,6 +42,10 @@ void read_mtl(const fs::path& path, Scene& scene, std::map<std::string, std::str
     } else if (t[0] == "Kd" || t[0] == "Ke") {
       if (!current) in.fail(fmt::format("'{}' before any 'newmtl'", t[0]));
       (t[0] == "Kd" ? current->rho : current->emission) = read_rgb(in, t);
+    } else if ((t[0] == "d" || t[0] == "Tr") && current && t.size() >= 2) {
+      // Dissolve (d) and its complement Tr: mpath's surfaces are opaque.
+      const double d = in.number(t[1], t[0]);
+      if (t[0] == "d" ? d < 1 : d > 0) see_through[current->name] = fmt::format("{} {}", t[0], t[1]);
     }
     // Other MTL statements (Ka, Ks, Ns, maps, illum) do not affect diffuse radiosity.
   }
@@ -59,13 +64,16 @@ size_t vertex_index(const TextTokenizer& in, std::string_view token, size_t vert
 
 }  // namespace
 
-Scene read_obj(const fs::path& path) {
+Scene read_obj(const fs::path& path, std::vector<std::string>* warnings) {
   Scene scene;
   scene.file = path;
   TextTokenizer in(path);
   std::vector<std::string_view> t;
   std::vector<Vec3> positions;
-  std::map<std::string, std::string> defined_at;
+  std::map<std::string, std::string> defined_at, see_through;
+  std::map<std::string, std::pair<size_t, std::string>> unknown;  // statement: count, first place
+  std::vector<std::string> notes;
+  size_t lines_points = 0;
   int material = -1;
   int object = -1;
   std::string pending_object = path.stem().string();
@@ -99,20 +107,40 @@ Scene read_obj(const fs::path& path) {
       object = -1;
     } else if (key == "usemtl") {
       in.expect_count(t, 1, 1, "'usemtl name'");
-      material = scene.find_material(std::string(t[1]));
-      if (material < 0) in.fail(fmt::format("unknown material '{}' (not defined in any mtllib read so far)", t[1]));
+      const std::string name(t[1]);
+      material = scene.find_material(name);
+      if (material < 0) {
+        // As viewers do: grey, under its own name (so that scene.emitters can light it).
+        notes.push_back(fmt::format("{}: material '{}' is in no mtllib read so far: grey 0.5", in.where(), name));
+        scene.materials.push_back(Material{name, {0.5, 0.5, 0.5}, {0, 0, 0}, false});
+        material = static_cast<int>(scene.materials.size()) - 1;
+      }
     } else if (key == "mtllib") {
       in.expect_count(t, 1, 64, "'mtllib file ...'");
       for (size_t i = 1; i < t.size(); ++i) {
         const fs::path mtl = path.parent_path() / std::string(t[i]);
-        if (!fs::exists(mtl)) in.fail(fmt::format("material library '{}' not found", mtl.string()));
-        read_mtl(mtl, scene, defined_at);
+        if (!fs::exists(mtl)) notes.push_back(fmt::format("{}: material library '{}' not found", in.where(), mtl.string()));
+        else read_mtl(mtl, scene, defined_at, see_through);
       }
-    } else if (key == "vn" || key == "vt" || key == "vp" || key == "s" || key == "l" || key == "p") {
-      // Normals, texture coordinates, smoothing groups, lines and points carry no radiosity.
+    } else if (key == "l" || key == "p") {
+      ++lines_points;  // lines and points have no area
+    } else if (key == "vn" || key == "vt" || key == "vp" || key == "s") {
+      // Normals, texture coordinates and smoothing groups carry no radiosity.
     } else {
-      in.fail(fmt::format("unknown OBJ statement '{}'", key));
+      auto& [count, first] = unknown[std::string(key.substr(0, 40))];
+      if (count++ == 0) first = in.where();
     }
+  }
+  if (warnings) {
+    for (const auto& n : notes) warnings->push_back(n);
+    for (const auto& [key, seen] : unknown)
+      warnings->push_back(fmt::format("OBJ: statement '{}' not read, {} line(s) skipped, the first at {}", key,
+                                      seen.first, seen.second));
+    if (lines_points > 0)
+      warnings->push_back(fmt::format("OBJ: {} line and point element(s) (l, p) ignored: they have no area", lines_points));
+    for (const auto& [name, what] : see_through)
+      warnings->push_back(fmt::format("material '{}' is partly transparent ({}): mpath makes every surface opaque",
+                                      name, what));
   }
   return scene;
 }

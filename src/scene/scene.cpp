@@ -42,8 +42,8 @@ double polygon_area(const std::vector<Vec3>& vertices) { return 0.5 * length(new
 
 void validate_material(const Material& m, const std::string& where) {
   for (int c = 0; c < 3; ++c) {
-    if (!(m.rho[c] >= 0.0 && m.rho[c] < 1.0))
-      throw InputError(fmt::format("{}: material '{}': reflectance {} is outside [0, 1)", where, m.name, m.rho[c]));
+    if (!(m.rho[c] >= 0.0 && m.rho[c] <= 1.0))
+      throw InputError(fmt::format("{}: material '{}': reflectance {} is outside [0, 1]", where, m.name, m.rho[c]));
     if (!(m.emission[c] >= 0.0) || !std::isfinite(m.emission[c]))
       throw InputError(fmt::format("{}: material '{}': emission {} must be finite and >= 0", where, m.name, m.emission[c]));
     // Far above any light source (the sun's disc is about 2e7), and far enough

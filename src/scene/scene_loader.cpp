@@ -79,7 +79,7 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   Scene scene;
-  if (ext == ".obj") scene = read_obj(path);
+  if (ext == ".obj") scene = read_obj(path, &warnings);
   else if (ext == ".ply") scene = read_ply(path);
   else if (ext == ".mgf") scene = read_mgf(path, curve_segments, options.mgf_default_sides, &warnings);
   else throw InputError(fmt::format("{}: unknown scene format '{}' (expected .obj, .ply or .mgf)", path.string(), ext));

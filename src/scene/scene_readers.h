@@ -10,7 +10,8 @@
 
 namespace mpath {
 
-Scene read_obj(const std::filesystem::path& path);
+// `warnings` (if given) gets what was skipped or assumed.
+Scene read_obj(const std::filesystem::path& path, std::vector<std::string>* warnings = nullptr);
 Scene read_ply(const std::filesystem::path& path);
 // Bytes of a PLY scalar type ("uchar", "float32", ...); 0 for an unknown one.
 size_t ply_type_size(const std::string& type);
@@ -24,7 +25,7 @@ struct SceneOptions {
   std::filesystem::path file;
   std::map<std::string, Rgb> emitters;  // material -> emitted radiance, W/sr/m2
   std::vector<std::string> two_sided;
-  int mgf_default_sides = 1;  // sides of MGF materials without a `sides` entity
+  int mgf_default_sides = 2;  // sides of MGF materials without a `sides` entity (the MGF default)
 };
 
 // Reads the scene `options.file` (format by extension; MGF curves with
