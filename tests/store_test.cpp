@@ -113,6 +113,46 @@ TEST(Store, ShardedStoreEqualsOneMadeAtOnceAndRerunsSkipFinishedFiles) {
               1e-9 * e["emitted"].get<double>());
 }
 
+// A store is made of the geometry and the line settings only: a reflectance
+// changed in the scene file, or by scene.materials in the config, is solved
+// on the kept store with exactly the answer of a fresh preprocess; moving a
+// vertex is refused.
+TEST(Store, MaterialsChangeWithoutRetracing) {
+  TempDir dir;
+  const std::string src = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box/cornell_box.";
+  const std::string obj = test::read_file(src + "obj"), mtl = test::read_file(src + "mtl");
+  test::write_file(dir / "cornell_box.obj", obj);
+  test::write_file(dir / "cornell_box.mtl", mtl);
+  const std::string scene = " scene.file=" + (dir / "cornell_box.obj").string();
+  const std::string kept = scene + " store.dir=" + (dir / "kept").string();
+  ASSERT_EQ(preprocess(kept).exit_code, 0);
+  const size_t at = mtl.find("Kd 0.7377 0.7361 0.7373");
+  ASSERT_NE(at, std::string::npos);
+  test::write_file(dir / "cornell_box.mtl", std::string(mtl).replace(at, 23, "Kd 0.3 0.4 0.5"));
+  RunResult r = solve(kept + " output.dir=" + (dir / "a").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string fresh = scene + " store.dir=" + (dir / "fresh").string();
+  ASSERT_EQ(preprocess(fresh).exit_code, 0);
+  ASSERT_EQ(solve(fresh + " output.dir=" + (dir / "b").string()).exit_code, 0);
+  const std::string a = test::read_file(dir / "a/solution.ply");
+  EXPECT_EQ(a, test::read_file(dir / "b/solution.ply"));
+  // The same change made in the config, on the first file.
+  test::write_file(dir / "cornell_box.mtl", mtl);
+  r = solve(kept + " scene.materials.white=[0.3,0.4,0.5] output.dir=" + (dir / "c").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(a, test::read_file(dir / "c/solution.ply"));
+  // And the change is seen: the file's own reflectance gives another answer.
+  ASSERT_EQ(solve(kept + " output.dir=" + (dir / "e").string()).exit_code, 0);
+  EXPECT_NE(a, test::read_file(dir / "e/solution.ply"));
+  // Geometry is not a material: a moved vertex is another store.
+  const size_t v = obj.find("v 0.5528 0.0000 0.0000");
+  ASSERT_NE(v, std::string::npos);
+  test::write_file(dir / "cornell_box.obj", std::string(obj).replace(v, 8, "v 0.5538"));
+  r = solve(kept + " output.dir=" + (dir / "d").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("mesh.hash"), std::string::npos) << r.output;
+}
+
 TEST(Store, ResumeGivesTheUninterruptedResult) {
   TempDir dir;
   const std::string store = " store.dir=" + (dir / "store").string();

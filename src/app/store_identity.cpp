@@ -5,10 +5,17 @@
 
 namespace mpath {
 
+// The geometry the store is made of: vertices, patches with their polygons
+// and objects (the hierarchy groups objects), faces. Not the materials'
+// reflectances and emission, which no stored line depends on.
 std::string mesh_hash(const PatchMesh& mesh) {
   Fnv1a h;
   for (const Vec3& v : mesh.vertices) h.add(&v, sizeof v);
-  for (const Patch& p : mesh.patches) h.add(p.v.data(), sizeof p.v);
+  for (const Patch& p : mesh.patches) {
+    h.add(p.v.data(), sizeof p.v);
+    h.add(&p.polygon, sizeof p.polygon);
+    h.add(&p.object, sizeof p.object);
+  }
   for (const auto& f : mesh.patch_faces) h.add(f.data(), sizeof f);
   return hex64(h.value());
 }
@@ -17,7 +24,6 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
   std::string two_sided;
   for (const auto& name : o.scene.two_sided) two_sided += (two_sided.empty() ? "" : ",") + name;
   return {
-      {"scene.file_hash", hash_file(o.scene.file)},
       {"mesh.hash", mesh_hash(mesh)},
       {"mesh.faces", std::to_string(mesh.face_count())},
       {"mesh.max_patch_area", fmt::format("{}", o.mesh.max_patch_area)},

@@ -1,3 +1,4 @@
+#include <limits>
 #include "config_keys.h"
 
 #include <fmt/format.h>
@@ -103,15 +104,52 @@ double in_range(double v, double lo, double hi, const ValueSource& src) {
   return v;
 }
 
-Rgb get_rgb(const toml::node& node, const ValueSource& src) {
+// [r, g, b] or one number for all three, each from 0 to `most`.
+Rgb get_rgb(const toml::node& node, const ValueSource& src, std::string_view what, double most) {
+  Rgb rgb;
   if (node.is_number()) {
     const double g = get_number(node, src);
-    if (g < 0) bad_value(src, "emitted radiance must not be negative");
-    return {g, g, g};
+    rgb = {g, g, g};
+  } else {
+    const Vec3 v = get_vec3(node, src);
+    rgb = {v.x, v.y, v.z};
   }
-  const Vec3 v = get_vec3(node, src);
-  if (v.x < 0 || v.y < 0 || v.z < 0) bad_value(src, "emitted radiance must not be negative");
-  return {v.x, v.y, v.z};
+  for (double c : rgb) {
+    if (c < 0) bad_value(src, fmt::format("{} must not be negative", what));
+    if (c > most) bad_value(src, fmt::format("{} must be at most {}", what, most));
+  }
+  return rgb;
+}
+
+// A one-element array holding `value` (toml::array{an_array} would copy the
+// array instead of nesting it).
+template <typename T>
+toml::array one(T&& value) {
+  toml::array out;
+  out.push_back(std::forward<T>(value));
+  return out;
+}
+
+// A table `material = [r, g, b]` of the config into a map of Options.
+ConfigKey rgb_table_key(const char* key, const char* help, std::map<std::string, Rgb> SceneOptions::*member,
+                        const char* what, double most) {
+  return {key, help,
+          [=](const toml::node& n, const ValueSource& s, Options& o) {
+            const toml::table* t = n.as_table();
+            if (!t) bad_value(s, fmt::format("expected a table of material = [r, g, b], got {}", type_name(n)));
+            auto& out = o.scene.*member;
+            out.clear();
+            for (const auto& [name, value] : *t) {
+              ValueSource e = s;
+              e.key = s.key + "." + std::string(name.str());
+              out[std::string(name.str())] = get_rgb(value, e, what, most);
+            }
+          },
+          [=](const Options& o) {
+            toml::table table;
+            for (const auto& [name, rgb] : o.scene.*member) table.insert(name, toml::array{rgb[0], rgb[1], rgb[2]});
+            return one(std::move(table));
+          }};
 }
 
 // A camera's name names its files in output.dir (NAME.exr, NAME.png): a plain
@@ -158,14 +196,6 @@ SolverMethod get_method(const toml::node& node, const ValueSource& src) {
                                 : SolverMethod::classic;
 }
 
-// A one-element array holding `value` (toml::array{an_array} would copy the
-// array instead of nesting it).
-template <typename T>
-toml::array one(T&& value) {
-  toml::array out;
-  out.push_back(std::forward<T>(value));
-  return out;
-}
 
 toml::array vec_to_toml(const Vec3& v) { return toml::array{v.x, v.y, v.z}; }
 
@@ -184,20 +214,13 @@ std::vector<ConfigKey> make_table() {
       {"scene.file", "OBJ, PLY or MGF file, relative to the config file (required)",
        SET(o.scene.file = get_path(n, s)),
        [](const Options& o) { return o.scene.file.empty() ? toml::array{} : toml::array{o.scene.file.string()}; }},
-      {"scene.emitters", "table `material = [r, g, b]` (or one number): emitted radiance in W/sr/m2, overriding the file",
-       SET(const toml::table* t = n.as_table();
-           if (!t) bad_value(s, fmt::format("expected a table of material = [r, g, b], got {}", type_name(n)));
-           o.scene.emitters.clear();
-           for (const auto& [name, value] : *t) {
-             ValueSource e = s;
-             e.key = s.key + "." + std::string(name.str());
-             o.scene.emitters[std::string(name.str())] = get_rgb(value, e);
-           }),
-       [](const Options& o) {
-         toml::table emitters;
-         for (const auto& [name, rgb] : o.scene.emitters) emitters.insert(name, toml::array{rgb[0], rgb[1], rgb[2]});
-         return one(std::move(emitters));
-       }},
+      rgb_table_key("scene.emitters",
+                    "table `material = [r, g, b]` (or one number): emitted radiance in W/sr/m2, overriding the file",
+                    &SceneOptions::emitters, "emitted radiance", std::numeric_limits<double>::infinity()),
+      rgb_table_key("scene.materials",
+                    "table `material = [r, g, b]` (or one number): diffuse reflectance, overriding the file (a kept "
+                    "store still serves)",
+                    &SceneOptions::materials, "a reflectance", 1.0),
       {"scene.two_sided", "material names whose surfaces have two faces, each with its own radiosity",
        SET(const toml::array* a = n.as_array();
            if (!a) bad_value(s, fmt::format("expected an array of material names, got {}", type_name(n)));

@@ -86,6 +86,8 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
 
   for (const auto& [name, radiance] : options.emitters)
     for (int m : require_materials(scene, "scene.emitters." + name, name)) scene.materials[m].emission = radiance;
+  for (const auto& [name, rho] : options.materials)
+    for (int m : require_materials(scene, "scene.materials." + name, name)) scene.materials[m].rho = rho;
   for (const auto& name : options.two_sided)
     for (int m : require_materials(scene, "scene.two_sided", name)) scene.materials[m].two_sided = true;
   for (const auto& m : scene.materials) validate_material(m, path.string());

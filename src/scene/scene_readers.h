@@ -23,7 +23,8 @@ Scene read_mgf(const std::filesystem::path& path, int curve_segments, int defaul
 // What the config says of the scene (section [scene]).
 struct SceneOptions {
   std::filesystem::path file;
-  std::map<std::string, Rgb> emitters;  // material -> emitted radiance, W/sr/m2
+  std::map<std::string, Rgb> emitters;   // material -> emitted radiance, W/sr/m2
+  std::map<std::string, Rgb> materials;  // material -> diffuse reflectance
   std::vector<std::string> two_sided;
   int mgf_default_sides = 2;  // sides of MGF materials without a `sides` entity (the MGF default)
 };
