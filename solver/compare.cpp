@@ -159,7 +159,9 @@ void run_compare(const Options& options, const CompareFlags& flags) {
           rgb[3 * i + k] = static_cast<uint8_t>(std::lround(255 * std::clamp(mixed, 0.0, 1.0)));
         }
       }
-      write_exr(flags.out / (cam.name + "_error.exr"), value, 0.0,
+      std::vector<float> error(static_cast<size_t>(value.width) * value.height);
+      for (size_t i = 0; i < error.size(); ++i) error[i] = value.rgb[3 * i];
+      write_scalar_exr(flags.out / (cam.name + "_error.exr"), value.width, value.height, std::move(error),
                 {{"mpathVersion", MPATH_VERSION},
                  {"mpathUnits", "relative error |Y - Y_ref| / Y_ref of the patches seen, Y the mean of R, G, B of "
                                 "B - E; -1 where only faces dark in the reference (below 1e-3 of the mean) are seen"},

@@ -135,14 +135,18 @@ void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& 
     for (const CameraOptions& cam : options.cameras) {
       const Image image = render_camera(cam, mesh, tracer, vertex_radiosity, options.lines.seed);
       if (options.output.exr) {
-        write_exr(options.output.dir / (cam.name + ".exr"), image, cam.exposure,
-                  {{"mpathVersion", MPATH_VERSION},
-                   {"mpathCommit", MPATH_GIT_COMMIT},
-                   {"mpathMethod", to_string(options.solver.method)},
-                   {"mpathScene", options.scene.file.string()},
-                   {"mpathUnits", "radiance W/sr/m2 times 2^exposure"},
-                   {"mpathConfig", options_to_json(options)}});
+        std::map<std::string, std::string> meta{{"mpathVersion", MPATH_VERSION},
+                                                {"mpathCommit", MPATH_GIT_COMMIT},
+                                                {"mpathMethod", to_string(options.solver.method)},
+                                                {"mpathScene", options.scene.file.string()},
+                                                {"mpathConfig", options_to_json(options)}};
+        meta["mpathUnits"] = "radiance W/sr/m2, scene-referred (the exposure attribute is for viewers)";
+        write_exr(options.output.dir / (cam.name + ".exr"), image, cam.exposure, meta);
+        meta["mpathUnits"] = "luminance cd/m2 (179 lm/W times the luminance Y of the radiance)";
+        write_scalar_exr(options.output.dir / (cam.name + ".luminance.exr"), image.width, image.height,
+                         luminance_cd_m2(image), meta);
         record.outputs.push_back(cam.name + ".exr");
+        record.outputs.push_back(cam.name + ".luminance.exr");
       }
       if (options.output.png) {
         write_png(options.output.dir / (cam.name + ".png"), image, cam.exposure);

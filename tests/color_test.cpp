@@ -10,6 +10,15 @@ TEST(Color, EqualEnergyWhiteIsGreyWithItsLuminance) {
   for (double c : rgb) EXPECT_NEAR(c, 0.42, 1e-12);
 }
 
+// Luminance undoes xyY_to_rgb for Y, for any chromaticity in the gamut
+// (lux and cd/m2 are 179 lm/W times it).
+TEST(Color, LuminanceOfAColourIsItsY) {
+  EXPECT_NEAR(luminance({1, 1, 1}), 1.0, 1e-6);
+  for (const Chromaticity c : {Chromaticity{0.3127, 0.3290}, Chromaticity{0.45, 0.41}, Chromaticity{0.25, 0.3},
+                               Chromaticity{0.6, 0.33}})
+    for (const double Y : {0.01, 0.5, 3.0}) EXPECT_NEAR(luminance(xyY_to_rgb(c, Y)), Y, 1e-6 * Y) << c.x << ", " << c.y;
+}
+
 TEST(Color, SaturatedPrimariesKeepTheirHue) {
   const Rgb red = xyY_to_rgb({0.64, 0.33}, 0.2);
   EXPECT_GT(red[0], 5 * red[1]);

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include <cmath>
 #include <limits>
 
@@ -152,6 +154,42 @@ TEST(PlyReader, ReadsBackTheSolutionItWrote) {
     EXPECT_NEAR(back.materials[back.polygons[f].material].rho[0], 0.5, 1e-6);
     EXPECT_NEAR(back.materials[back.polygons[f].material].emission[1], 1.0 / std::numbers::pi, 1e-6);
   }
+}
+
+// Viewers (MeshLab, Blender) show solution.ply's per-vertex and per-face
+// red green blue: sRGB of the radiosity scaled so that the 95th percentile
+// (by area, faces that do not emit) shows at 0.8 of white.
+TEST(SolutionPly, CarriesToneMappedColoursForViewers) {
+  TempDir dir;
+  Scene scene = test::furnace_scene(0.5, 1.0);
+  for (Material& m : scene.materials) m.emission = {0, 0, 0};
+  const PatchMesh mesh = build_mesh(scene, 0.5);
+  RadiosityState state = make_state(scene, mesh);
+  for (size_t f = 0; f < mesh.face_count(); ++f)
+    for (int c = 0; c < state.channels; ++c) state.phi[state.at(f, c)] = 3.0 * mesh.face_area(static_cast<int>(f));
+  state.phi[state.at(0, 0)] *= 10;  // one face far brighter than the rest: it clips
+  write_solution_ply(dir / "solution.ply", mesh, state.solution_faces(mesh));
+  const std::string text = test::read_file(dir / "solution.ply");
+  ASSERT_NE(text.find("property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nelement face"),
+            std::string::npos);
+  ASSERT_NE(text.find("property int object\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header"),
+            std::string::npos);
+  size_t at = text.find("end_header\n") + 11;
+  const auto srgb = [](double v) { return static_cast<int>(std::lround(255 * (1.055 * std::pow(v, 1 / 2.4) - 0.055))); };
+  std::set<int> vertex_red;
+  for (size_t v = 0; v < mesh.vertices.size(); ++v, at += 15) vertex_red.insert(static_cast<uint8_t>(text[at + 12]));
+  EXPECT_TRUE(vertex_red.count(srgb(0.8))) << "the common radiosity shows at 0.8";
+  std::vector<int> face_red;
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const int corners = static_cast<uint8_t>(text[at]);
+    at += 1 + 4 * corners + 10 * 4 + 2 * 4;
+    face_red.push_back(static_cast<uint8_t>(text[at]));
+    EXPECT_EQ(static_cast<uint8_t>(text[at + 1]), static_cast<uint8_t>(text[at])) << "face " << f;  // grey
+    at += 3;
+  }
+  EXPECT_EQ(at, text.size());
+  EXPECT_EQ(face_red[0], 255);
+  for (size_t f = 1; f < face_red.size(); ++f) EXPECT_EQ(face_red[f], srgb(0.8)) << "face " << f;
 }
 
 TEST(PlyReader, ReportsTruncatedAndMalformedFiles) {

@@ -1,16 +1,20 @@
 // Camera images of a solution: every pixel of the EXR, read back with
-// OpenEXR, is the radiance B / pi of the patch it sees, times 2^exposure.
+// OpenEXR, is the radiance B / pi of the patch it sees (scene-referred: the
+// exposure is an attribute for viewers), and the EXR says what its RGB
+// means; the luminance image is 179 lm/W times its luminance, in cd/m2.
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFloatAttribute.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
+#include <OpenEXR/ImfStandardAttributes.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
+#include "color.h"
 #include "image_writer.h"
 #include "render.h"
 #include "test_util.h"
@@ -76,19 +80,40 @@ TEST(Render, ExrPixelsAreTheRadianceOfThePatchSeen) {
   cam.exposure = 1.5;
   const Image image = render_camera(cam, mesh, tracer, VertexRadiosity(mesh, state), 1);
   TempDir dir;
-  write_exr(dir / "room.exr", image, cam.exposure, {{"mpathUnits", "radiance W/sr/m2 times 2^exposure"}});
+  write_exr(dir / "room.exr", image, cam.exposure, {{"mpathUnits", "radiance W/sr/m2"}});
   const ExrImage back = read_exr(dir / "room.exr");
   ASSERT_EQ(back.width, cam.width);
   ASSERT_EQ(back.height, cam.height);
   EXPECT_FLOAT_EQ(back.exposure, 1.5f);
-  EXPECT_EQ(back.units, "radiance W/sr/m2 times 2^exposure");
+  EXPECT_EQ(back.units, "radiance W/sr/m2");
+  {
+    Imf::InputFile file((dir / "room.exr").c_str());
+    ASSERT_TRUE(Imf::hasChromaticities(file.header()));
+    const Imf::Chromaticities c = Imf::chromaticities(file.header());
+    EXPECT_FLOAT_EQ(c.red.x, 0.64f);
+    EXPECT_FLOAT_EQ(c.green.y, 0.60f);
+    EXPECT_FLOAT_EQ(c.white.x, 1 / 3.f);  // equal-energy white, not D65
+    ASSERT_TRUE(Imf::hasWhiteLuminance(file.header()));
+    EXPECT_FLOAT_EQ(Imf::whiteLuminance(file.header()), 179.f);
+  }
+  write_scalar_exr(dir / "room.luminance.exr", image.width, image.height, luminance_cd_m2(image), {});
+  std::vector<float> y(static_cast<size_t>(image.width) * image.height);
+  {
+    Imf::InputFile file((dir / "room.luminance.exr").c_str());
+    Imf::FrameBuffer fb;
+    fb.insert("Y", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(y.data()), sizeof(float), sizeof(float) * image.width));
+    file.setFrameBuffer(fb);
+    file.readPixels(0, image.height - 1);
+  }
   // The face straight ahead, found as the renderer does: one ray through the centre.
   const NearestHit hit = tracer.nearest(cam.position, {1, 0, 0}, 0.0, 100.0);
   ASSERT_GE(hit.patch, 0);
   const int face = mesh.patch_faces[hit.patch][0];
   ASSERT_GE(face, 0);
   const size_t centre = static_cast<size_t>(cam.height / 2) * cam.width + cam.width / 2;
-  const double scale = std::exp2(cam.exposure) / std::numbers::pi;
+  const double scale = 1 / std::numbers::pi;
+  const Rgb seen{radiosity[face][0] * scale, radiosity[face][1] * scale, radiosity[face][2] * scale};
+  EXPECT_NEAR(y[centre], 179 * luminance(seen), 1e-5 * 179 * luminance(seen));
   EXPECT_NEAR(back.r[centre], radiosity[face][0] * scale, 1e-5 * radiosity[face][0] * scale);
   EXPECT_NEAR(back.g[centre], radiosity[face][1] * scale, 1e-5 * radiosity[face][1] * scale);
   EXPECT_NEAR(back.b[centre], radiosity[face][2] * scale, 1e-5 * radiosity[face][2] * scale);

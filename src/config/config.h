@@ -23,7 +23,7 @@ struct CameraOptions {
   int width = 512;
   int height = 512;
   int samples = 4;            // jittered primary rays per pixel
-  double exposure = 0.0;      // pixel = radiance * 2^exposure
+  double exposure = 0.0;      // PNG pixel = radiance * 2^exposure (an attribute of the EXR)
 };
 
 // How mpath-solve solves (solver.method).

@@ -322,7 +322,7 @@ std::vector<ConfigKey> make_table() {
       {"output.png", "a tone-mapped PNG preview beside each EXR", SET(o.output.png = get_bool(n, s)), GET(o.output.png)},
       {"camera",
        "`name`, `position`, `look_at`, `up` (`[0,1,0]`), `fov_deg` (vertical, 40), `width`, `height` (512), `samples` "
-       "per pixel (4), `exposure` (0: pixel = radiance x 2^exposure)",
+       "per pixel (4), `exposure` (stops: the PNG shows radiance x 2^exposure; the EXR keeps it as an attribute)",
        SET(o.cameras.clear();
            if (const toml::table* t = n.as_table()) {
              o.cameras.push_back(get_camera(*t, s, 0));

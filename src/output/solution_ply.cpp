@@ -1,5 +1,6 @@
 #include "solution_ply.h"
 
+#include <algorithm>
 #include <bit>
 
 #include <cmath>
@@ -25,6 +26,34 @@ void put(std::ostream& out, T v) {
   out.write(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 
+uint8_t srgb8(double linear) {
+  const double v = std::clamp(linear, 0.0, 1.0);
+  const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+  return static_cast<uint8_t>(std::lround(255.0 * s));
+}
+
+// The display scale of the colours: the 95th percentile (by area) of the
+// radiosity of the faces that do not emit (of all, if every face emits)
+// shows at 0.8 of white; emitters and the brightest 5 % clip.
+double display_scale(const PatchMesh& mesh, const std::vector<SolutionFace>& faces) {
+  std::vector<std::pair<double, double>> value_area;
+  for (const bool lit_only : {true, false}) {
+    for (size_t f = 0; f < faces.size(); ++f) {
+      const auto& e = faces[f].exitance;
+      if (lit_only && e[0] + e[1] + e[2] > 0) continue;
+      const auto& b = faces[f].radiosity;
+      value_area.push_back({(b[0] + b[1] + b[2]) / 3, mesh.patches[mesh.face_patch[f]].area});
+    }
+    if (!value_area.empty()) break;
+  }
+  std::sort(value_area.begin(), value_area.end());
+  double total = 0, seen = 0;
+  for (const auto& [v, a] : value_area) total += a;
+  for (const auto& [v, a] : value_area)
+    if ((seen += a) >= 0.95 * total) return v > 0 ? 0.8 / v : 1.0;
+  return 1.0;
+}
+
 }  // namespace
 
 void write_solution_ply(const std::filesystem::path& path, const PatchMesh& mesh, const std::vector<SolutionFace>& faces) {
@@ -35,21 +64,43 @@ void write_solution_ply(const std::filesystem::path& path, const PatchMesh& mesh
         if (!(std::fabs(v) <= std::numeric_limits<float>::max()))
           throw std::runtime_error(fmt::format("{}: face {} has a value no float holds ({}); nothing written",
                                                path.string(), f, v));
+  // Colours for viewers: per vertex the area-weighted radiosity of the front
+  // faces around it (of the back faces where it has no front), per face its
+  // own, tone-mapped to sRGB.
+  const double scale = display_scale(mesh, faces);
+  std::vector<std::array<double, 4>> vertex_sum(mesh.vertices.size(), {0, 0, 0, 0});  // per side below
+  std::vector<std::array<double, 4>> back_sum(mesh.vertices.size(), {0, 0, 0, 0});
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const Patch& p = mesh.patches[mesh.face_patch[f]];
+    auto& sums = mesh.face_side[f] ? back_sum : vertex_sum;
+    for (int k = 0; k < (p.is_triangle() ? 3 : 4); ++k) {
+      auto& s = sums[p.v[k]];
+      for (int c = 0; c < 3; ++c) s[c] += p.area * faces[f].radiosity[c];
+      s[3] += p.area;
+    }
+  }
   AtomicFile file(path);
   std::ostream& out = file.stream();
   out << "ply\nformat binary_little_endian 1.0\n"
       << "comment mpath " << MPATH_VERSION << " radiosity solution; B and emit in W/m2, area in scene units^2\n"
+      << "comment red green blue: sRGB of B times " << fmt::format("{:.6g}", scale)
+      << " (the 95th percentile by area of the faces that do not emit at 0.8), clipped; for viewers only\n"
       << "element vertex " << mesh.vertices.size() << "\n"
       << "property float x\nproperty float y\nproperty float z\n"
+      << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
       << "element face " << faces.size() << "\n"
       << "property list uchar int vertex_indices\n";
   for (const char* name : {"area", "rho_r", "rho_g", "rho_b", "emit_r", "emit_g", "emit_b", "B_r", "B_g", "B_b"})
     out << "property float " << name << "\n";
-  out << "property int polygon\nproperty int object\nend_header\n";
-  for (const Vec3& v : mesh.vertices) {
+  out << "property int polygon\nproperty int object\n"
+      << "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const Vec3& v = mesh.vertices[i];
     put(out, static_cast<float>(v.x));
     put(out, static_cast<float>(v.y));
     put(out, static_cast<float>(v.z));
+    const auto& s = vertex_sum[i][3] > 0 ? vertex_sum[i] : back_sum[i];
+    for (int c = 0; c < 3; ++c) put<uint8_t>(out, srgb8(s[3] > 0 ? scale * s[c] / s[3] : 0.0));
   }
   for (size_t f = 0; f < faces.size(); ++f) {
     const Patch& p = mesh.patches[mesh.face_patch[f]];
@@ -66,6 +117,7 @@ void write_solution_ply(const std::filesystem::path& path, const PatchMesh& mesh
     for (double v : faces[f].radiosity) put(out, static_cast<float>(v));
     put<int32_t>(out, p.polygon);
     put<int32_t>(out, p.object);
+    for (double v : faces[f].radiosity) put<uint8_t>(out, srgb8(scale * v));
   }
   file.commit();
 }

@@ -66,6 +66,12 @@ Chromaticity blackbody_chromaticity(double kelvin) {
   return chromaticity(sum);
 }
 
+double luminance(const Rgb& rgb) {
+  // Y = (the Y row of the Rec. 709 XYZ matrix) . (rgb scaled back by the white balance).
+  static const Rgb white = xyz_to_709({1.0, 1.0, 1.0});
+  return 0.2126729 * white[0] * rgb[0] + 0.7151522 * white[1] * rgb[1] + 0.0721750 * white[2] * rgb[2];
+}
+
 Rgb xyY_to_rgb(Chromaticity c, double Y) {
   if (c.y <= 0 || Y == 0) return {0, 0, 0};
   const Xyz xyz{c.x / c.y * Y, Y, (1.0 - c.x - c.y) / c.y * Y};

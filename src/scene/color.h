@@ -34,8 +34,14 @@ Chromaticity blackbody_chromaticity(double kelvin);
 // saturated colours; callers decide what to do with them.
 Rgb xyY_to_rgb(Chromaticity c, double Y);
 
-// Luminous efficacy RenderPark uses to turn MGF's photometric emittance
-// (lm/m2) into radiometric exitance (W/m2).
+// Luminance Y of one of mpath's linear RGB values (the inverse of xyY_to_rgb
+// for Y): (1, 1, 1) has Y = 1.
+double luminance(const Rgb& rgb);
+
+// Luminous efficacy of mpath's white (equal-energy, 179 lm/W, Radiance's):
+// MGF's photometric emittance (lm/m2) over it is radiometric exitance (W/m2),
+// and a radiometric Y times it is photometric (W/m2 -> lux, W/sr/m2 -> cd/m2).
+// RenderPark's MGF reader uses 183.07 (docs/colour.md).
 inline constexpr double kWhiteEfficacy = 179.0;
 
 }  // namespace mpath

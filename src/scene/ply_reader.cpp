@@ -211,6 +211,10 @@ Scene read_ply(const fs::path& path) {
   Faces faces;
   for (const Element& e : header.elements) {
     if (e.properties.empty()) continue;  // nothing to read, however many
+    // rho_r/g/b name the reflectance where they are (red/green/blue beside
+    // them are display colours, as in mpath's own solution.ply).
+    const bool rho_named = std::any_of(e.properties.begin(), e.properties.end(),
+                                       [](const Property& p) { return p.name.rfind("rho_", 0) == 0; });
     for (size_t item = 0; item < e.count; ++item) {
       const Where context{e.name, item, e.count};
       Vec3 p;
@@ -242,6 +246,7 @@ Scene read_ply(const fs::path& path) {
           static const std::map<std::string, int> channel = {{"rho_r", 0}, {"rho_g", 1}, {"rho_b", 2},
                                                              {"red", 0},   {"green", 1}, {"blue", 2}};
           if (auto it = channel.find(prop.name); it != channel.end()) {
+            if (rho_named && prop.name.rfind("rho_", 0) != 0) continue;
             rho[it->second] = is_integer_type(prop.type) ? v / 255.0 : v;
             faces.has_rho = true;
           } else if (prop.name == "emit_r" || prop.name == "emit_g" || prop.name == "emit_b") {
