@@ -97,6 +97,7 @@ std::string checkpoint_key(const Options& options, const PatchMesh& mesh, int th
   o.solver.tolerance = 0;
   o.output = {};
   o.cameras.clear();
+  o.grids.clear();
   o.store.zstd_level = 0;
   // Where files live does not change the state (their contents are hashed below);
   // the thread count is added as the effective one.

@@ -94,6 +94,7 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
       {"hierarchy", store ? hierarchy_json(*store, state, r.box_stats) : json(nullptr)},
       {"energy", energy_json(state)},
       {"outputs", r.outputs},
+      {"grids", r.grids},
       {"warnings", [&] {
          std::vector<std::string> all = prepared.warnings;
          all.insert(all.end(), r.warnings.begin(), r.warnings.end());

@@ -34,6 +34,7 @@ struct SolveRecord {
   uint64_t uncarried_lines = 0;  // local lines for power no stored line can carry
   std::vector<BoxPassStats> box_stats;
   std::vector<std::string> outputs;
+  nlohmann::json grids = nlohmann::json::array();  // photometric grids' figures
   std::vector<std::string> warnings;  // of the solve itself, after the scene's
 };
 

@@ -12,6 +12,7 @@
 #include "first_shot.h"
 #include "mpath_version.h"
 #include "prepared_scene.h"
+#include "photometry.h"
 #include "render.h"
 #include "sampling.h"
 #include "solution_ply.h"
@@ -153,6 +154,16 @@ void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& 
         record.outputs.push_back(cam.name + ".png");
       }
     }
+  }
+  for (const GridOptions& grid : options.grids) {
+    const GridResult result = measure_grid(grid, mesh, tracer, state, options.lines.seed);
+    write_grid_csv(options.output.dir / (grid.name + ".csv"), result);
+    write_grid_png(options.output.dir / (grid.name + ".png"), result);
+    record.outputs.push_back(grid.name + ".csv");
+    record.outputs.push_back(grid.name + ".png");
+    record.grids.push_back(grid_json(result));
+    spdlog::info("grid {}: illuminance min {:.4g}, mean {:.4g}, max {:.4g} lx, uniformity {:.3f}", grid.name,
+                 result.min_lux, result.mean_lux, result.max_lux, result.mean_lux > 0 ? result.min_lux / result.mean_lux : 0.0);
   }
   record.timings.outputs = seconds_since(start);
 }

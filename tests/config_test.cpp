@@ -143,7 +143,8 @@ TEST(Config, UserGuideKeyTableIsTheCodesTable) {
 // Every key of the table is found by its name and printed by --print-config.
 TEST(Config, EveryKeyOfTheTableIsPrinted) {
   TempDir dir;
-  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n[[camera]]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\n");
+  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n[[camera]]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\n"
+                               "[[grid]]\norigin = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\n");
   const toml::table printed = toml::parse(options_to_toml(load_options(dir / "run.toml", {})));
   for (const ConfigKey& k : config_keys()) {
     EXPECT_EQ(find_config_key(k.key), &k);

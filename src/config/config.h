@@ -26,6 +26,20 @@ struct CameraOptions {
   double exposure = 0.0;      // PNG pixel = radiance * 2^exposure (an attribute of the EXR)
 };
 
+// A grid of illuminance sensors (a work plane): nu x nv points at the centres
+// of equal cells of the rectangle origin + s u + t v, s and t in [0, 1],
+// each facing `normal` (zero: u x v normalised).
+struct GridOptions {
+  std::string name = "grid";
+  Vec3 origin{0, 0, 0};
+  Vec3 u{1, 0, 0};
+  Vec3 v{0, 1, 0};
+  int nu = 10;
+  int nv = 10;
+  Vec3 normal{0, 0, 0};
+  int samples = 4096;  // gathering rays per point
+};
+
 // How mpath-solve solves (solver.method).
 enum class SolverMethod {
   hierarchical,  // stored lines of the hierarchy of subscenes
@@ -86,6 +100,7 @@ struct Options {
   } output;
 
   std::vector<CameraOptions> cameras;
+  std::vector<GridOptions> grids;
 };
 
 // Loads `config_path` and applies `overrides` ("dotted.key=value"). Paths in the

@@ -152,9 +152,9 @@ ConfigKey rgb_table_key(const char* key, const char* help, std::map<std::string,
           }};
 }
 
-// A camera's name names its files in output.dir (NAME.exr, NAME.png): a plain
-// file name, never a path.
-std::string get_camera_name(const toml::node& node, const ValueSource& src) {
+// A camera's or grid's name names its files in output.dir (NAME.exr,
+// NAME.csv, ...): a plain file name, never a path.
+std::string get_file_name(const toml::node& node, const ValueSource& src) {
   const std::string name = get_string(node, src);
   const bool plain = !name.empty() && name.size() <= 100 && name[0] != '.' &&
                      std::all_of(name.begin(), name.end(), [](unsigned char c) {
@@ -162,7 +162,7 @@ std::string get_camera_name(const toml::node& node, const ValueSource& src) {
                      });
   if (!plain)
     bad_value(src, fmt::format("'{}' is not a plain file name (letters, digits, '_', '-', '.', not starting with "
-                               "'.', at most 100 characters): it names the camera's files in output.dir", name));
+                               "'.', at most 100 characters): it names files in output.dir", name));
   return name;
 }
 
@@ -173,7 +173,7 @@ CameraOptions get_camera(const toml::table& table, const ValueSource& parent, si
     ValueSource src = parent;
     src.key = fmt::format("{}[{}].{}", parent.key, index, std::string(k.str()));
     const std::string key(k.str());
-    if (key == "name") cam.name = get_camera_name(node, src);
+    if (key == "name") cam.name = get_file_name(node, src);
     else if (key == "position") cam.position = get_vec3(node, src);
     else if (key == "look_at") cam.look_at = get_vec3(node, src);
     else if (key == "up") cam.up = get_vec3(node, src);
@@ -189,6 +189,33 @@ CameraOptions get_camera(const toml::table& table, const ValueSource& parent, si
   return cam;
 }
 
+GridOptions get_grid(const toml::table& table, const ValueSource& parent, size_t index) {
+  GridOptions grid;
+  grid.name = fmt::format("grid{}", index);
+  bool has_origin = false, has_u = false, has_v = false;
+  for (const auto& [k, node] : table) {
+    ValueSource src = parent;
+    src.key = fmt::format("{}[{}].{}", parent.key, index, std::string(k.str()));
+    const std::string key(k.str());
+    if (key == "name") grid.name = get_file_name(node, src);
+    else if (key == "origin") has_origin = (grid.origin = get_vec3(node, src), true);
+    else if (key == "u") has_u = (grid.u = get_vec3(node, src), true);
+    else if (key == "v") has_v = (grid.v = get_vec3(node, src), true);
+    else if (key == "nu") grid.nu = static_cast<int>(positive_at_most(get_integer(node, src), 1000, src));
+    else if (key == "nv") grid.nv = static_cast<int>(positive_at_most(get_integer(node, src), 1000, src));
+    else if (key == "normal") grid.normal = get_vec3(node, src);
+    else if (key == "samples") grid.samples = static_cast<int>(positive_at_most(get_integer(node, src), 1 << 20, src));
+    else bad_value(src, "unknown key");
+  }
+  if (!has_origin || !has_u || !has_v) bad_value(parent, fmt::format("grid {} needs `origin`, `u` and `v`", index));
+  if (length(cross(grid.u, grid.v)) == 0.0 && length(grid.normal) == 0.0)
+    bad_value(parent, fmt::format("grid '{}': u and v are parallel (or zero) and no `normal` is given", grid.name));
+  if (static_cast<long long>(grid.nu) * grid.nv * grid.samples > 4'000'000'000LL)
+    bad_value(parent, fmt::format("grid '{}': {} x {} points of {} rays is more than 4e9 rays", grid.name, grid.nu,
+                                  grid.nv, grid.samples));
+  return grid;
+}
+
 SolverMethod get_method(const toml::node& node, const ValueSource& src) {
   const std::string name = get_choice(node, src, "method", {"hierarchical", "multipath", "classic"});
   return name == "hierarchical" ? SolverMethod::hierarchical
@@ -198,6 +225,12 @@ SolverMethod get_method(const toml::node& node, const ValueSource& src) {
 
 
 toml::array vec_to_toml(const Vec3& v) { return toml::array{v.x, v.y, v.z}; }
+
+toml::table grid_table(const GridOptions& g) {
+  return toml::table{{"name", g.name}, {"origin", vec_to_toml(g.origin)}, {"u", vec_to_toml(g.u)},
+                     {"v", vec_to_toml(g.v)}, {"nu", g.nu}, {"nv", g.nv}, {"normal", vec_to_toml(g.normal)},
+                     {"samples", g.samples}};
+}
 
 toml::table camera_table(const CameraOptions& c) {
   return toml::table{{"name", c.name}, {"position", vec_to_toml(c.position)}, {"look_at", vec_to_toml(c.look_at)},
@@ -343,6 +376,29 @@ std::vector<ConfigKey> make_table() {
          for (const auto& c : o.cameras) cameras.push_back(camera_table(c));
          return one(std::move(cameras));
        }},
+      {"grid",
+       "`name`, `origin`, `u`, `v` (edges of the rectangle), `nu`, `nv` (points, at cell centres; 10), `normal` (u x v), "
+       "`samples` (gathering rays per point, 4096): NAME.csv and NAME.png of irradiance and illuminance",
+       SET(o.grids.clear();
+           const toml::array* a = n.as_array();
+           if (const toml::table* t = n.as_table()) {
+             o.grids.push_back(get_grid(*t, s, 0));
+             return;
+           }
+           if (!a || !a->is_array_of_tables()) bad_value(s, "expected [[grid]] tables");
+           for (size_t i = 0; i < a->size(); ++i) {
+             o.grids.push_back(get_grid(*a->get(i)->as_table(), s, i));
+             for (size_t j = 0; j < i; ++j)
+               if (o.grids[j].name == o.grids[i].name)
+                 bad_value(s, fmt::format("grids {} and {} are both named '{}' (their files would overwrite each "
+                                          "other)", j, i, o.grids[i].name));
+           }),
+       [](const Options& o) {
+         if (o.grids.empty()) return toml::array{};
+         toml::array grids;
+         for (const auto& g : o.grids) grids.push_back(grid_table(g));
+         return one(std::move(grids));
+       }},
   };
 }
 
@@ -392,7 +448,8 @@ std::string config_keys_markdown() {
   for (const ConfigKey& k : config_keys()) {
     const toml::array value = k.get(defaults);
     const std::string shown = value.empty() ? "none" : "`" + inline_toml(*value.get(0)) + "`";
-    out += fmt::format("| `{}` | {} | {} |\n", k.key == "camera" ? "[[camera]]" : k.key, shown, k.meaning);
+    const bool tables = k.key == "camera" || k.key == "grid";
+    out += fmt::format("| `{}` | {} | {} |\n", tables ? "[[" + k.key + "]]" : k.key, shown, k.meaning);
   }
   return out;
 }

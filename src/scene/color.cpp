@@ -68,8 +68,16 @@ Chromaticity blackbody_chromaticity(double kelvin) {
 
 double luminance(const Rgb& rgb) {
   // Y = (the Y row of the Rec. 709 XYZ matrix) . (rgb scaled back by the white balance).
-  static const Rgb white = xyz_to_709({1.0, 1.0, 1.0});
-  return 0.2126729 * white[0] * rgb[0] + 0.7151522 * white[1] * rgb[1] + 0.0721750 * white[2] * rgb[2];
+  // Normalised so that white (1, 1, 1) is 1 to rounding (the published
+  // coefficients of the two matrices agree to 1e-7 only).
+  static const std::array<double, 3> w = [] {
+    const Rgb white = xyz_to_709({1.0, 1.0, 1.0});
+    std::array<double, 3> k{0.2126729 * white[0], 0.7151522 * white[1], 0.0721750 * white[2]};
+    const double sum = k[0] + k[1] + k[2];
+    for (double& x : k) x /= sum;
+    return k;
+  }();
+  return w[0] * rgb[0] + w[1] * rgb[1] + w[2] * rgb[2];
 }
 
 Rgb xyY_to_rgb(Chromaticity c, double Y) {
