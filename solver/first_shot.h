@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "config.h"
+#include "luminaire.h"
 #include "radiosity_state.h"
 #include "sampling.h"
 #include "tracer.h"
@@ -51,6 +52,14 @@ void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int fa
   const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
   receive(state, mesh.patch_faces[hit.patch][side], power, acc);
 }
+
+// Point sources ([[light]]): their radiant power is added to the emitted
+// energy and shot along `lines` lines from each light's position, drawn in
+// proportion to its intensity, each carrying an equal share of its power to
+// the face it meets first. Returns the lines shot per light.
+std::vector<uint64_t> shoot_lights(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state,
+                                   const std::vector<PointLight>& lights, long long lines, unsigned long long seed,
+                                   int shards);
 
 // `accelerated`: find nearest hits through the subscenes' associated patches
 // (first_shot.accelerate) instead of the whole scene's tracer.

@@ -69,7 +69,7 @@ std::string lux_label(double v) { return v >= 100 ? fmt::format("{:.0f}", v) : f
 }  // namespace
 
 GridResult measure_grid(const GridOptions& grid, const PatchMesh& mesh, const Tracer& tracer,
-                        const RadiosityState& state, unsigned long long seed) {
+                        const RadiosityState& state, const std::vector<PointLight>& lights, unsigned long long seed) {
   GridResult out;
   out.options = grid;
   out.normal = length(grid.normal) > 0 ? normalize(grid.normal) : normalize(cross(grid.u, grid.v));
@@ -130,6 +130,19 @@ GridResult measure_grid(const GridOptions& grid, const PatchMesh& mesh, const Tr
       // (radiance M / pi) cos / (p_cos + p_light): the balance heuristic's share of this strategy.
       const double g = cos_here / (cos_here / std::numbers::pi + light_pdf(face, r, cos_there));
       for (int c = 0; c < 3; ++c) sum[c] += exitance[c] / std::numbers::pi * g / grid.samples;
+    }
+    // Point sources: exact at the point, where nothing is in between (seen
+    // from the lifted point).
+    for (const PointLight& light : lights) {
+      const Vec3 d = light.options.position - point.position;
+      const double r = length(d);
+      const double cos_here = r > 0 ? dot(out.normal, d) / r : 0.0;
+      if (cos_here <= 0) continue;
+      const Vec3 to = light.options.position - from;
+      const NearestHit hit = tracer.nearest(from, normalize(to), 0.0, length(to) * (1 - 1e-9));
+      if (hit.patch >= 0) continue;
+      const double e = light.radiant_intensity(-d / r) * cos_here / (r * r);
+      for (int c = 0; c < 3; ++c) sum[c] += e;
     }
     // Cosine rays: the radiosity of what they meet, its emission weighed
     // against the emitter sampling.

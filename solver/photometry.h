@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "config.h"
+#include "luminaire.h"
 #include "radiosity_state.h"
 #include "tracer.h"
 
@@ -38,8 +39,9 @@ struct GridResult {
 // in between) and the two estimates of it weighed by the balance heuristic. Illuminance is 179 lm/W times its
 // luminance. A point most of whose rays meet a black back is covered (in or
 // under an object: a book on the desk) and left out of the figures.
+// Point sources add their direct light, I cos / r^2 where nothing is in between.
 GridResult measure_grid(const GridOptions& grid, const PatchMesh& mesh, const Tracer& tracer,
-                        const RadiosityState& state, unsigned long long seed);
+                        const RadiosityState& state, const std::vector<PointLight>& lights, unsigned long long seed);
 
 // NAME.csv (one row per point), NAME.png (false colour with a legend in lux).
 void write_grid_csv(const std::filesystem::path& path, const GridResult& grid);

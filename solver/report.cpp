@@ -79,6 +79,17 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
       {"first_shot", {{"lines", r.shot.lines}, {"emitter_faces", r.shot.emitter_faces},
                       {"associated_hits", r.shot.associated_hits},
                       {"global_emitter_faces", r.shot.global_emitter_faces}, {"from_checkpoint", r.resumed}}},
+      {"lights", [&] {
+         json lights = json::array();
+         for (size_t l = 0; l < options.scene.lights.size(); ++l) {
+           const PointLight light = make_light(options.scene.lights[l]);
+           lights.push_back({{"name", light.options.name},
+                             {"flux_lm", light.options.multiplier * light.distribution.flux()},
+                             {"power_W", light.power()},
+                             {"first_shot_lines", l < r.light_lines.size() ? r.light_lines[l] : 0}});
+         }
+         return lights;
+       }()},
       {"lines", {{"global", r.iterations.lines}, {"hits", r.iterations.hits}, {"local", r.shot.lines},
                  {"local_uncarried", r.uncarried_lines}}},
       {"iterations", {{"count", r.iterations.passes.size()}, {"converged", r.iterations.converged},

@@ -35,6 +35,7 @@ struct SolveRecord {
   std::vector<BoxPassStats> box_stats;
   std::vector<std::string> outputs;
   nlohmann::json grids = nlohmann::json::array();  // photometric grids' figures
+  std::vector<uint64_t> light_lines;                // first-shot lines of each [[light]]
   std::vector<std::string> warnings;  // of the solve itself, after the scene's
 };
 

@@ -41,7 +41,8 @@ std::unique_ptr<BoxStore> open_store(const Options& options, const PatchMesh& me
 
 // Restores the state from the checkpoint (--resume) or runs the first shot.
 void start_state(const Options& options, const SolveFlags& flags, const PatchMesh& mesh, const Tracer& tracer,
-                 const BoxStore* store, const Checkpoint& checkpoint, RadiosityState& state, SolveRecord& record) {
+                 const BoxStore* store, const Checkpoint& checkpoint, const std::vector<PointLight>& lights,
+                 RadiosityState& state, SolveRecord& record) {
   if (flags.resume && std::filesystem::exists(checkpoint.path)) {
     read_checkpoint(checkpoint.path, checkpoint.key, state, record.iterations);
     record.resumed = true;
@@ -55,8 +56,23 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
   std::unique_ptr<SubsceneNearest> accelerated;
   if (options.first_shot.accelerate && store && store->box_count() > 1 && !store->line_sets())
     accelerated = std::make_unique<SubsceneNearest>(mesh, *store);
-  record.shot = first_shot(mesh, tracer, state, options.first_shot.lines, options.lines.seed, record.threads,
-                           emitter_crossings(options, std::move(crossings)), accelerated.get());
+  // first_shot.lines shared by power between the emitting faces and the lights.
+  double faces_power = state.emitted_total(), lights_power = 0;
+  for (const PointLight& l : lights) lights_power += l.power() * state.channels;
+  const double total_power = faces_power + lights_power;
+  const auto share = [&](double power) {
+    return static_cast<long long>(std::llround(static_cast<double>(options.first_shot.lines) * power / total_power));
+  };
+  record.shot = first_shot(mesh, tracer, state, lights.empty() ? options.first_shot.lines : share(faces_power),
+                           options.lines.seed, record.threads, emitter_crossings(options, std::move(crossings)),
+                           accelerated.get());
+  for (size_t l = 0; l < lights.size(); ++l) {
+    const long long lines = std::max<long long>(10'000, share(lights[l].power() * state.channels));
+    const std::vector<uint64_t> shot =
+        shoot_lights(mesh, tracer, state, {lights[l]}, lines, options.lines.seed + 7919 * (l + 1), record.threads);
+    record.shot.lines += shot[0];
+    record.light_lines.push_back(shot[0]);
+  }
   checkpoint.save(state, record.iterations);
 }
 
@@ -126,7 +142,8 @@ void log_remaining(const Options& options, const PatchMesh& mesh, const BoxStore
 }
 
 // solution.ply and, per camera, the EXR and PNG images; their names in `record`.
-void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& tracer, const RadiosityState& state,
+void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& tracer,
+                   const std::vector<PointLight>& lights, const RadiosityState& state,
                    SolveRecord& record) {
   const auto start = clock::now();
   write_solution_ply(options.output.dir / "solution.ply", mesh, state.solution_faces(mesh));
@@ -156,7 +173,7 @@ void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& 
     }
   }
   for (const GridOptions& grid : options.grids) {
-    const GridResult result = measure_grid(grid, mesh, tracer, state, options.lines.seed);
+    const GridResult result = measure_grid(grid, mesh, tracer, state, lights, options.lines.seed);
     write_grid_csv(options.output.dir / (grid.name + ".csv"), result);
     write_grid_png(options.output.dir / (grid.name + ".png"), result);
     record.outputs.push_back(grid.name + ".csv");
@@ -193,13 +210,18 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   record.timings.bvh = seconds_since(bvh_start);
 
   RadiosityState state = make_state(prepared.scene, mesh);
+  std::vector<PointLight> lights;
+  for (const LightOptions& l : options.scene.lights) lights.push_back(make_light(l));
+  for (const PointLight& l : lights)
+    spdlog::info("light {}: {:.4g} lm, {:.4g} W (at 179 lm/W)", l.options.name, l.options.multiplier * l.distribution.flux(),
+                 l.power());
   if (store) add_ar_state(*store, state);
   spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
   const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, mesh, record.threads)};
-  start_state(options, flags, mesh, tracer, store.get(), checkpoint, state, record);
+  start_state(options, flags, mesh, tracer, store.get(), checkpoint, lights, state, record);
   run_iterations(options, mesh, tracer, store.get(), checkpoint, state, record);
   log_remaining(options, mesh, store.get(), state, record.iterations, record.warnings);
-  write_outputs(options, mesh, tracer, state, record);
+  write_outputs(options, mesh, tracer, lights, state, record);
 
   record.timings.total = seconds_since(start);
   const nlohmann::json report = solve_report(options, prepared, state, store.get(), record);

@@ -144,7 +144,8 @@ TEST(Config, UserGuideKeyTableIsTheCodesTable) {
 TEST(Config, EveryKeyOfTheTableIsPrinted) {
   TempDir dir;
   write_file(dir / "run.toml", "scene.file = \"a.obj\"\n[[camera]]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\n"
-                               "[[grid]]\norigin = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\n");
+                               "[[grid]]\norigin = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\n"
+                               "[[light]]\nposition = [0, 0, 2]\nintensity_cd = 100\n");
   const toml::table printed = toml::parse(options_to_toml(load_options(dir / "run.toml", {})));
   for (const ConfigKey& k : config_keys()) {
     EXPECT_EQ(find_config_key(k.key), &k);

@@ -45,7 +45,7 @@ TEST(Photometry, ClosedFurnaceReadsItsRadiosityEverywhere) {
     g.nv = 5;
     g.normal = normal;
     g.samples = 256;
-    const GridResult r = measure_grid(g, mesh, tracer, state, 1);
+    const GridResult r = measure_grid(g, mesh, tracer, state, {}, 1);
     ASSERT_EQ(r.points.size(), 35u);
     for (const GridPoint& p : r.points) {
       EXPECT_NEAR(p.irradiance[0], 2.5, 1e-12) << p.position.x << ", " << p.position.y;
@@ -61,7 +61,7 @@ TEST(Photometry, ClosedFurnaceReadsItsRadiosityEverywhere) {
   g.nu = 2;
   g.nv = 1;
   g.samples = 64;
-  const GridResult r = measure_grid(g, mesh, tracer, state, 1);
+  const GridResult r = measure_grid(g, mesh, tracer, state, {}, 1);
   EXPECT_TRUE(r.points[0].covered);
   EXPECT_EQ(r.points[0].illuminance, 0.0);
   EXPECT_FALSE(r.points[1].covered);
@@ -90,7 +90,7 @@ TEST(Photometry, EmissionSeenByBothStrategiesIsUnbiased) {
   g.samples = 1024;
   std::vector<double> readings;
   for (unsigned seed = 1; seed <= 8; ++seed)
-    for (const GridPoint& p : measure_grid(g, mesh, tracer, state, seed).points) readings.push_back(p.irradiance[0]);
+    for (const GridPoint& p : measure_grid(g, mesh, tracer, state, {}, seed).points) readings.push_back(p.irradiance[0]);
   double mean = 0, var = 0;
   for (double r : readings) mean += r / readings.size();
   for (double r : readings) var += (r - mean) * (r - mean) / (readings.size() - 1);
@@ -125,7 +125,7 @@ TEST(Photometry, SensorUnderAnEmittingSquareReadsItsFormFactor) {
     g.v = {0, 2e-3, 0};
     g.nu = g.nv = 1;
     g.samples = samples;
-    const GridResult r = measure_grid(g, mesh, tracer, state, 7);
+    const GridResult r = measure_grid(g, mesh, tracer, state, {}, 7);
     const double sigma = 3.0 * std::sqrt(f * (1 - f) / samples);
     EXPECT_NEAR(r.points[0].irradiance[0], 3.0 * f, 4 * sigma) << samples << " samples, F = " << f;
   }

@@ -216,6 +216,32 @@ GridOptions get_grid(const toml::table& table, const ValueSource& parent, size_t
   return grid;
 }
 
+LightOptions get_light(const toml::table& table, const ValueSource& parent, size_t index) {
+  LightOptions light;
+  light.name = fmt::format("light{}", index);
+  bool placed = false;
+  for (const auto& [k, node] : table) {
+    ValueSource src = parent;
+    src.key = fmt::format("{}[{}].{}", parent.key, index, std::string(k.str()));
+    const std::string key(k.str());
+    if (key == "name") light.name = get_file_name(node, src);
+    else if (key == "position") placed = (light.position = get_vec3(node, src), true);
+    else if (key == "intensity_cd") light.intensity_cd = in_range(get_number(node, src), 0.0, 1e10, src);
+    else if (key == "ies") light.ies = get_path(node, src);
+    else if (key == "multiplier") light.multiplier = in_range(get_number(node, src), 0.0, 1e6, src);
+    else if (key == "nadir") light.nadir = get_vec3(node, src);
+    else if (key == "c0") light.c0 = get_vec3(node, src);
+    else bad_value(src, "unknown key");
+  }
+  if (!placed) bad_value(parent, fmt::format("light {} needs a `position`", index));
+  if ((light.intensity_cd > 0) == !light.ies.empty())
+    bad_value(parent, fmt::format("light '{}' needs one of `intensity_cd` (isotropic) and `ies` (a photometric file)",
+                                  light.name));
+  if (length(light.nadir) == 0 || length(cross(light.nadir, light.c0)) == 0)
+    bad_value(parent, fmt::format("light '{}': `nadir` must be non-zero and not parallel to `c0`", light.name));
+  return light;
+}
+
 SolverMethod get_method(const toml::node& node, const ValueSource& src) {
   const std::string name = get_choice(node, src, "method", {"hierarchical", "multipath", "classic"});
   return name == "hierarchical" ? SolverMethod::hierarchical
@@ -230,6 +256,14 @@ toml::table grid_table(const GridOptions& g) {
   return toml::table{{"name", g.name}, {"origin", vec_to_toml(g.origin)}, {"u", vec_to_toml(g.u)},
                      {"v", vec_to_toml(g.v)}, {"nu", g.nu}, {"nv", g.nv}, {"normal", vec_to_toml(g.normal)},
                      {"samples", g.samples}};
+}
+
+toml::table light_table(const LightOptions& l) {
+  toml::table t{{"name", l.name}, {"position", vec_to_toml(l.position)}, {"multiplier", l.multiplier},
+                {"nadir", vec_to_toml(l.nadir)}, {"c0", vec_to_toml(l.c0)}};
+  if (l.ies.empty()) t.insert("intensity_cd", l.intensity_cd);
+  else t.insert("ies", l.ies.string());
+  return t;
 }
 
 toml::table camera_table(const CameraOptions& c) {
@@ -376,6 +410,23 @@ std::vector<ConfigKey> make_table() {
          for (const auto& c : o.cameras) cameras.push_back(camera_table(c));
          return one(std::move(cameras));
        }},
+      {"light",
+       "point source: `name`, `position`, `intensity_cd` (isotropic) or `ies` (IESNA LM-63 file, type C), "
+       "`multiplier` (1), `nadir` (its 0 degree direction, [0,0,-1]), `c0` (its C0 plane, [1,0,0]); white",
+       SET(o.scene.lights.clear();
+           const toml::array* a = n.as_array();
+           if (const toml::table* t = n.as_table()) {
+             o.scene.lights.push_back(get_light(*t, s, 0));
+             return;
+           }
+           if (!a || !a->is_array_of_tables()) bad_value(s, "expected [[light]] tables");
+           for (size_t i = 0; i < a->size(); ++i) o.scene.lights.push_back(get_light(*a->get(i)->as_table(), s, i))),
+       [](const Options& o) {
+         if (o.scene.lights.empty()) return toml::array{};
+         toml::array lights;
+         for (const auto& l : o.scene.lights) lights.push_back(light_table(l));
+         return one(std::move(lights));
+       }},
       {"grid",
        "`name`, `origin`, `u`, `v` (edges of the rectangle), `nu`, `nv` (points, at cell centres; 10), `normal` (u x v), "
        "`samples` (gathering rays per point, 4096): NAME.csv and NAME.png of irradiance and illuminance",
@@ -448,7 +499,7 @@ std::string config_keys_markdown() {
   for (const ConfigKey& k : config_keys()) {
     const toml::array value = k.get(defaults);
     const std::string shown = value.empty() ? "none" : "`" + inline_toml(*value.get(0)) + "`";
-    const bool tables = k.key == "camera" || k.key == "grid";
+    const bool tables = k.key == "camera" || k.key == "grid" || k.key == "light";
     out += fmt::format("| `{}` | {} | {} |\n", tables ? "[[" + k.key + "]]" : k.key, shown, k.meaning);
   }
   return out;

@@ -104,9 +104,9 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
         "chance by the lines and the methods light them differently; remove the duplicates", repeated));
   const bool any_emitter = std::any_of(scene.polygons.begin(), scene.polygons.end(),
                                        [&](const Polygon& p) { return scene.materials[p.material].emits(); });
-  if (!any_emitter)
+  if (!any_emitter && options.lights.empty())
     throw InputError(fmt::format("{}: the scene has no emitting polygon (give a material emission in the file, "
-                                 "or name it in the config's [scene.emitters])", path.string()));
+                                 "name it in the config's [scene.emitters], or add a [[light]])", path.string()));
   return scene;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "luminaire.h"
 #include "scene.h"
 
 namespace mpath {
@@ -25,6 +26,7 @@ struct SceneOptions {
   std::filesystem::path file;
   std::map<std::string, Rgb> emitters;   // material -> emitted radiance, W/sr/m2
   std::map<std::string, Rgb> materials;  // material -> diffuse reflectance
+  std::vector<LightOptions> lights;      // point sources ([[light]])
   std::vector<std::string> two_sided;
   int mgf_default_sides = 2;  // sides of MGF materials without a `sides` entity (the MGF default)
 };
