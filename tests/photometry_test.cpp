@@ -25,17 +25,30 @@ void set_radiosity(RadiosityState& state, const PatchMesh& mesh, double b) {
     for (int c = 0; c < state.channels; ++c) state.phi[state.at(f, c)] = b * mesh.face_area(static_cast<int>(f));
 }
 
+// test::furnace_scene (rho 0.5, the given exitance) with every face at
+// radiosity B, and its tracer.
+struct UniformRoom {
+  PatchMesh mesh;
+  RadiosityState state;
+  Tracer tracer;
+  UniformRoom(double exitance, double b)
+      : mesh(build_mesh(test::furnace_scene(0.5, exitance), 0.05)),
+        state(make_state(test::furnace_scene(0.5, exitance), mesh)),
+        tracer(mesh) {
+    set_radiosity(state, mesh, b);
+  }
+};
+
 // In a closed room whose every face has radiosity B, a sensor anywhere inside
 // facing any way sees B in every direction: with no emission its irradiance
 // is B exactly (every cosine ray, whatever the sample count), its illuminance
 // 179 B. Points on a surface (the floor, facing up) read the same. (The grids
 // avoid the furniture of test::furnace_scene.)
 TEST(Photometry, ClosedFurnaceReadsItsRadiosityEverywhere) {
-  const Scene scene = test::furnace_scene(0.5, 0.0);
-  const PatchMesh mesh = build_mesh(scene, 0.05);
-  RadiosityState state = make_state(scene, mesh);
-  set_radiosity(state, mesh, 2.5);
-  const Tracer tracer(mesh);
+  const UniformRoom room(0.0, 2.5);
+  const PatchMesh& mesh = room.mesh;
+  const RadiosityState& state = room.state;
+  const Tracer& tracer = room.tracer;
   for (const Vec3 normal : {Vec3{0, 0, 0}, Vec3{0, 0, 1}, Vec3{0, 0, -1}, Vec3{1, 0.3, 0}, Vec3{-0.2, 1, 0.5}}) {
     GridOptions g;
     g.origin = {0.35, 0.05, normal.z > 0 ? 0.0 : 0.2};  // on the floor facing up, else in the air
@@ -75,11 +88,10 @@ TEST(Photometry, ClosedFurnaceReadsItsRadiosityEverywhere) {
 // from 8 seeds at each point (sigma of one reading); every reading within
 // 5 sigma, their mean within 4 sigma / sqrt(readings).
 TEST(Photometry, EmissionSeenByBothStrategiesIsUnbiased) {
-  const Scene scene = test::furnace_scene(0.5, 1.0);
-  const PatchMesh mesh = build_mesh(scene, 0.05);
-  RadiosityState state = make_state(scene, mesh);
-  set_radiosity(state, mesh, 2.5);
-  const Tracer tracer(mesh);
+  const UniformRoom room(1.0, 2.5);
+  const PatchMesh& mesh = room.mesh;
+  const RadiosityState& state = room.state;
+  const Tracer& tracer = room.tracer;
   GridOptions g;
   g.origin = {0.35, 0.05, 0.2};
   g.u = {0.8, 0, 0};

@@ -272,6 +272,40 @@ toml::table camera_table(const CameraOptions& c) {
                      {"samples", c.samples}, {"exposure", c.exposure}};
 }
 
+// An array of tables ([[camera]], [[light]], [[grid]]) read into the vector
+// `of(options)` by `read`; two of one name are an error (a name names files
+// and report entries).
+template <typename T>
+ConfigKey table_array_key(const char* key, const char* help, std::vector<T>& (*of)(Options&),
+                          T (*read)(const toml::table&, const ValueSource&, size_t), toml::table (*write)(const T&),
+                          const char* plural) {
+  return {key, help,
+          [=](const toml::node& n, const ValueSource& s, Options& o) {
+            std::vector<T>& out = of(o);
+            out.clear();
+            if (const toml::table* t = n.as_table()) {
+              out.push_back(read(*t, s, 0));
+              return;
+            }
+            const toml::array* a = n.as_array();
+            if (!a || !a->is_array_of_tables()) bad_value(s, fmt::format("expected [[{}]] tables", key));
+            for (size_t i = 0; i < a->size(); ++i) {
+              out.push_back(read(*a->get(i)->as_table(), s, i));
+              for (size_t j = 0; j < i; ++j)
+                if (out[j].name == out[i].name)
+                  bad_value(s, fmt::format("{} {} and {} are both named '{}' (their files would overwrite each other)",
+                                           plural, j, i, out[i].name));
+            }
+          },
+          [=](const Options& o) {
+            const std::vector<T>& in = of(const_cast<Options&>(o));
+            if (in.empty()) return toml::array{};
+            toml::array all;
+            for (const T& x : in) all.push_back(write(x));
+            return one(std::move(all));
+          }};
+}
+
 // A row's reader and printer: `o` is the options, `n` the TOML value and `s` where it came from.
 #define SET(...) [](const toml::node& n, const ValueSource& s, Options& o) { __VA_ARGS__; }
 #define GET(...) [](const Options& o) { return toml::array{__VA_ARGS__}; }
@@ -387,69 +421,22 @@ std::vector<ConfigKey> make_table() {
        GET(o.output.dir.string())},
       {"output.exr", "an EXR image per camera", SET(o.output.exr = get_bool(n, s)), GET(o.output.exr)},
       {"output.png", "a tone-mapped PNG preview beside each EXR", SET(o.output.png = get_bool(n, s)), GET(o.output.png)},
-      {"camera",
-       "`name`, `position`, `look_at`, `up` (`[0,1,0]`), `fov_deg` (vertical, 40), `width`, `height` (512), `samples` "
-       "per pixel (4), `exposure` (stops: the PNG shows radiance x 2^exposure; the EXR keeps it as an attribute)",
-       SET(o.cameras.clear();
-           if (const toml::table* t = n.as_table()) {
-             o.cameras.push_back(get_camera(*t, s, 0));
-             return;
-           }
-           const toml::array* a = n.as_array();
-           if (!a || !a->is_array_of_tables()) bad_value(s, "expected [[camera]] tables");
-           for (size_t i = 0; i < a->size(); ++i) {
-             o.cameras.push_back(get_camera(*a->get(i)->as_table(), s, i));
-             for (size_t j = 0; j < i; ++j)
-               if (o.cameras[j].name == o.cameras[i].name)
-                 bad_value(s, fmt::format("cameras {} and {} are both named '{}' (their files would overwrite each "
-                                          "other)", j, i, o.cameras[i].name));
-           }),
-       [](const Options& o) {
-         if (o.cameras.empty()) return toml::array{};
-         toml::array cameras;
-         for (const auto& c : o.cameras) cameras.push_back(camera_table(c));
-         return one(std::move(cameras));
-       }},
-      {"light",
-       "point source: `name`, `position`, `intensity_cd` (isotropic) or `ies` (IESNA LM-63 file, type C), "
-       "`multiplier` (1), `nadir` (its 0 degree direction, [0,0,-1]), `c0` (its C0 plane, [1,0,0]); white",
-       SET(o.scene.lights.clear();
-           const toml::array* a = n.as_array();
-           if (const toml::table* t = n.as_table()) {
-             o.scene.lights.push_back(get_light(*t, s, 0));
-             return;
-           }
-           if (!a || !a->is_array_of_tables()) bad_value(s, "expected [[light]] tables");
-           for (size_t i = 0; i < a->size(); ++i) o.scene.lights.push_back(get_light(*a->get(i)->as_table(), s, i))),
-       [](const Options& o) {
-         if (o.scene.lights.empty()) return toml::array{};
-         toml::array lights;
-         for (const auto& l : o.scene.lights) lights.push_back(light_table(l));
-         return one(std::move(lights));
-       }},
-      {"grid",
-       "`name`, `origin`, `u`, `v` (edges of the rectangle), `nu`, `nv` (points, at cell centres; 10), `normal` (u x v), "
-       "`samples` (gathering rays per point, 4096): NAME.csv and NAME.png of irradiance and illuminance",
-       SET(o.grids.clear();
-           const toml::array* a = n.as_array();
-           if (const toml::table* t = n.as_table()) {
-             o.grids.push_back(get_grid(*t, s, 0));
-             return;
-           }
-           if (!a || !a->is_array_of_tables()) bad_value(s, "expected [[grid]] tables");
-           for (size_t i = 0; i < a->size(); ++i) {
-             o.grids.push_back(get_grid(*a->get(i)->as_table(), s, i));
-             for (size_t j = 0; j < i; ++j)
-               if (o.grids[j].name == o.grids[i].name)
-                 bad_value(s, fmt::format("grids {} and {} are both named '{}' (their files would overwrite each "
-                                          "other)", j, i, o.grids[i].name));
-           }),
-       [](const Options& o) {
-         if (o.grids.empty()) return toml::array{};
-         toml::array grids;
-         for (const auto& g : o.grids) grids.push_back(grid_table(g));
-         return one(std::move(grids));
-       }},
+      table_array_key<CameraOptions>(
+          "camera",
+          "`name`, `position`, `look_at`, `up` (`[0,1,0]`), `fov_deg` (vertical, 40), `width`, `height` (512), "
+          "`samples` per pixel (4), `exposure` (stops: the PNG shows radiance x 2^exposure; the EXR keeps it as an "
+          "attribute)",
+          [](Options& o) -> std::vector<CameraOptions>& { return o.cameras; }, get_camera, camera_table, "cameras"),
+      table_array_key<LightOptions>(
+          "light",
+          "point source: `name`, `position`, `intensity_cd` (isotropic) or `ies` (IESNA LM-63 file, type C), "
+          "`multiplier` (1), `nadir` (its 0 degree direction, [0,0,-1]), `c0` (its C0 plane, [1,0,0]); white",
+          [](Options& o) -> std::vector<LightOptions>& { return o.scene.lights; }, get_light, light_table, "lights"),
+      table_array_key<GridOptions>(
+          "grid",
+          "`name`, `origin`, `u`, `v` (edges of the rectangle), `nu`, `nv` (points, at cell centres; 10), `normal` "
+          "(u x v), `samples` (gathering rays per point, 4096): NAME.csv and NAME.png of irradiance and illuminance",
+          [](Options& o) -> std::vector<GridOptions>& { return o.grids; }, get_grid, grid_table, "grids"),
   };
 }
 
