@@ -118,41 +118,34 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   return stats;
 }
 
-std::vector<uint64_t> shoot_lights(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state,
-                                   const std::vector<PointLight>& lights, long long lines, unsigned long long seed,
-                                   int shards) {
-  std::vector<uint64_t> shot;
+uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const PointLight& light,
+                     long long lines, unsigned long long seed, int shards) {
   const int ch = state.channels;
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
-  for (size_t l = 0; l < lights.size(); ++l) {
-    const PointLight& light = lights[l];
-    const double power = light.power();  // white: the same radiant power in every channel
-    for (int c = 0; c < ch; ++c) state.energy.emitted[c] += power;
-    const uint64_t n = power > 0 ? static_cast<uint64_t>(std::max<long long>(lines, 1)) : 0;
-    shot.push_back(n);
-    if (n == 0) continue;
-    std::vector<ShardAccumulator> acc(shards);
-    tbb::parallel_for(0, shards, [&](int s) {
-      ShardAccumulator& a = acc[s];
-      a.reset(state.faces);
-      Rng rng = make_rng(seed, kLightStream, (static_cast<unsigned long long>(l) << 20) + static_cast<unsigned>(s));
-      double share[3] = {0, 0, 0};
-      for (int c = 0; c < ch; ++c) share[c] = power / static_cast<double>(n);
-      for (uint64_t k = n * s / shards; k < n * (s + 1) / shards; ++k) {
-        const Vec3 dir = light.sample(uniform(rng), uniform(rng), uniform(rng));
-        const NearestHit hit = tracer.nearest(light.options.position, dir, 0.0, tfar);
-        ++a.lines;
-        if (hit.patch < 0) {
-          for (int c = 0; c < ch; ++c) a.escaped[c] += share[c];
-          continue;
-        }
-        const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
-        receive(state, mesh.patch_faces[hit.patch][side], share, a);
+  const double power = light.power();  // white: the same radiant power in every channel
+  for (int c = 0; c < ch; ++c) state.energy.emitted[c] += power;
+  const uint64_t n = power > 0 ? static_cast<uint64_t>(std::max<long long>(lines, 1)) : 0;
+  if (n == 0) return 0;
+  std::vector<ShardAccumulator> acc(shards);
+  tbb::parallel_for(0, shards, [&](int s) {
+    ShardAccumulator& a = acc[s];
+    a.reset(state.faces);
+    Rng rng = make_rng(seed, kLightStream, static_cast<unsigned long long>(s));
+    const double share[3] = {power / static_cast<double>(n), power / static_cast<double>(n), power / static_cast<double>(n)};
+    for (uint64_t k = n * s / shards; k < n * (s + 1) / shards; ++k) {
+      const Vec3 dir = light.sample(uniform(rng), uniform(rng), uniform(rng));
+      const NearestHit hit = tracer.nearest(light.options.position, dir, 0.0, tfar);
+      ++a.lines;
+      if (hit.patch < 0) {
+        for (int c = 0; c < ch; ++c) a.escaped[c] += share[c];
+        continue;
       }
-    });
-    merge_received(acc, state);
-  }
-  return shot;
+      const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
+      receive(state, mesh.patch_faces[hit.patch][side], share, a);
+    }
+  });
+  merge_received(acc, state);
+  return n;
 }
 
 }  // namespace mpath

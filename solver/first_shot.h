@@ -53,13 +53,12 @@ void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int fa
   receive(state, mesh.patch_faces[hit.patch][side], power, acc);
 }
 
-// Point sources ([[light]]): their radiant power is added to the emitted
-// energy and shot along `lines` lines from each light's position, drawn in
+// A point source ([[light]]): its radiant power is added to the emitted
+// energy and shot along `lines` lines from its position, drawn in
 // proportion to its intensity, each carrying an equal share of its power to
-// the face it meets first. Returns the lines shot per light.
-std::vector<uint64_t> shoot_lights(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state,
-                                   const std::vector<PointLight>& lights, long long lines, unsigned long long seed,
-                                   int shards);
+// the face it meets first. Returns the lines shot.
+uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const PointLight& light,
+                     long long lines, unsigned long long seed, int shards);
 
 // `accelerated`: find nearest hits through the subscenes' associated patches
 // (first_shot.accelerate) instead of the whole scene's tracer.

@@ -81,13 +81,9 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
                       {"global_emitter_faces", r.shot.global_emitter_faces}, {"from_checkpoint", r.resumed}}},
       {"lights", [&] {
          json lights = json::array();
-         for (size_t l = 0; l < options.scene.lights.size(); ++l) {
-           const PointLight light = make_light(options.scene.lights[l]);
-           lights.push_back({{"name", light.options.name},
-                             {"flux_lm", light.options.multiplier * light.distribution.flux()},
-                             {"power_W", light.power()},
-                             {"first_shot_lines", l < r.light_lines.size() ? r.light_lines[l] : 0}});
-         }
+         for (const SolveRecord::Light& l : r.lights)
+           lights.push_back({{"name", l.name}, {"flux_lm", l.flux_lm}, {"power_W", l.power_W},
+                             {"first_shot_lines", l.first_shot_lines}});
          return lights;
        }()},
       {"lines", {{"global", r.iterations.lines}, {"hits", r.iterations.hits}, {"local", r.shot.lines},

@@ -35,7 +35,12 @@ struct SolveRecord {
   std::vector<BoxPassStats> box_stats;
   std::vector<std::string> outputs;
   nlohmann::json grids = nlohmann::json::array();  // photometric grids' figures
-  std::vector<uint64_t> light_lines;                // first-shot lines of each [[light]]
+  struct Light {
+    std::string name;
+    double flux_lm = 0, power_W = 0;
+    uint64_t first_shot_lines = 0;  // 0 when resumed from a checkpoint
+  };
+  std::vector<Light> lights;
   std::vector<std::string> warnings;  // of the solve itself, after the scene's
 };
 

@@ -68,10 +68,10 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
                            accelerated.get());
   for (size_t l = 0; l < lights.size(); ++l) {
     const long long lines = std::max<long long>(10'000, share(lights[l].power() * state.channels));
-    const std::vector<uint64_t> shot =
-        shoot_lights(mesh, tracer, state, {lights[l]}, lines, options.lines.seed + 7919 * (l + 1), record.threads);
-    record.shot.lines += shot[0];
-    record.light_lines.push_back(shot[0]);
+    const uint64_t shot =
+        shoot_light(mesh, tracer, state, lights[l], lines, options.lines.seed + 7919 * (l + 1), record.threads);
+    record.shot.lines += shot;
+    record.lights[l].first_shot_lines = shot;
   }
   checkpoint.save(state, record.iterations);
 }
@@ -212,9 +212,10 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   RadiosityState state = make_state(prepared.scene, mesh);
   std::vector<PointLight> lights;
   for (const LightOptions& l : options.scene.lights) lights.push_back(make_light(l));
-  for (const PointLight& l : lights)
-    spdlog::info("light {}: {:.4g} lm, {:.4g} W (at 179 lm/W)", l.options.name, l.options.multiplier * l.distribution.flux(),
-                 l.power());
+  for (const PointLight& l : lights) {
+    spdlog::info("light {}: {:.4g} lm, {:.4g} W (at 179 lm/W)", l.options.name, l.flux(), l.power());
+    record.lights.push_back({l.options.name, l.flux(), l.power(), 0});
+  }
   if (store) add_ar_state(*store, state);
   spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
   const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, mesh, record.threads)};

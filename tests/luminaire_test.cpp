@@ -112,7 +112,7 @@ TEST(Luminaire, FirstShotSpreadsTheLightsPowerByItsIntensity) {
   const PointLight light = make_light(o);
   EXPECT_NEAR(light.power(), 1.0, 1e-9);
   const long long n = 60000;
-  shoot_lights(mesh, tracer, state, {light}, n, 1, 2);
+  EXPECT_EQ(shoot_light(mesh, tracer, state, light, n, 1, 2), static_cast<uint64_t>(n));
   EXPECT_NEAR(state.emitted_total(), state.channels * 1.0, 1e-12);
   for (size_t f = 0; f < 6; ++f) {
     const double received = state.phi[state.at(f, 0)] / 0.5;

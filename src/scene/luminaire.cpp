@@ -166,7 +166,7 @@ double PointLight::radiant_intensity(const Vec3& dir) const {
   return options.multiplier * distribution.intensity(theta, phi) / kWhiteEfficacy;
 }
 
-double PointLight::power() const { return options.multiplier * distribution.flux() / kWhiteEfficacy; }
+double PointLight::power() const { return flux() / kWhiteEfficacy; }
 
 Vec3 PointLight::sample(double u1, double u2, double u3) const {
   double theta, phi;

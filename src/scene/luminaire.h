@@ -60,7 +60,8 @@ struct PointLight {
   Vec3 nadir, c0, c90;  // orthonormal frame
   // Radiant intensity (W/sr, equal-energy white) towards world direction `dir`.
   double radiant_intensity(const Vec3& dir) const;
-  // Radiant power (W) of the light.
+  // Luminous flux (lm) and radiant power (W, flux / 179 lm/W) of the light.
+  double flux() const { return options.multiplier * distribution.flux(); }
   double power() const;
   // A world direction drawn in proportion to the intensity.
   Vec3 sample(double u1, double u2, double u3) const;
