@@ -25,6 +25,19 @@ void set_radiosity(RadiosityState& state, const PatchMesh& mesh, double b) {
     for (int c = 0; c < state.channels; ++c) state.phi[state.at(f, c)] = b * mesh.face_area(static_cast<int>(f));
 }
 
+// A grid of nu x nv points on the rectangle origin + s u + t v.
+GridOptions grid(const Vec3& origin, const Vec3& u, const Vec3& v, int nu, int nv, int samples, const Vec3& normal = {}) {
+  GridOptions g;
+  g.origin = origin;
+  g.u = u;
+  g.v = v;
+  g.nu = nu;
+  g.nv = nv;
+  g.samples = samples;
+  g.normal = normal;
+  return g;
+}
+
 // test::furnace_scene (rho 0.5, the given exitance) with every face at
 // radiosity B, and its tracer.
 struct UniformRoom {
@@ -50,14 +63,8 @@ TEST(Photometry, ClosedFurnaceReadsItsRadiosityEverywhere) {
   const RadiosityState& state = room.state;
   const Tracer& tracer = room.tracer;
   for (const Vec3 normal : {Vec3{0, 0, 0}, Vec3{0, 0, 1}, Vec3{0, 0, -1}, Vec3{1, 0.3, 0}, Vec3{-0.2, 1, 0.5}}) {
-    GridOptions g;
-    g.origin = {0.35, 0.05, normal.z > 0 ? 0.0 : 0.2};  // on the floor facing up, else in the air
-    g.u = {0.8, 0, 0};
-    g.v = {0, 0.9, 0};
-    g.nu = 7;
-    g.nv = 5;
-    g.normal = normal;
-    g.samples = 256;
+    // On the floor facing up, else in the air.
+    const GridOptions g = grid({0.35, 0.05, normal.z > 0 ? 0.0 : 0.2}, {0.8, 0, 0}, {0, 0.9, 0}, 7, 5, 256, normal);
     const GridResult r = measure_grid(g, mesh, tracer, state, {}, 1);
     ASSERT_EQ(r.points.size(), 35u);
     for (const GridPoint& p : r.points) {
@@ -67,13 +74,7 @@ TEST(Photometry, ClosedFurnaceReadsItsRadiosityEverywhere) {
   }
   // A point inside the floating cube sees only its black backs: covered, and
   // left out of the figures.
-  GridOptions g;
-  g.origin = {0.4, 0.6, 0.45};
-  g.u = {0.6, 0, 0};
-  g.v = {0, 0.01, 0};
-  g.nu = 2;
-  g.nv = 1;
-  g.samples = 64;
+  const GridOptions g = grid({0.4, 0.6, 0.45}, {0.6, 0, 0}, {0, 0.01, 0}, 2, 1, 64);
   const GridResult r = measure_grid(g, mesh, tracer, state, {}, 1);
   EXPECT_TRUE(r.points[0].covered);
   EXPECT_EQ(r.points[0].illuminance, 0.0);
@@ -92,14 +93,7 @@ TEST(Photometry, EmissionSeenByBothStrategiesIsUnbiased) {
   const PatchMesh& mesh = room.mesh;
   const RadiosityState& state = room.state;
   const Tracer& tracer = room.tracer;
-  GridOptions g;
-  g.origin = {0.35, 0.05, 0.2};
-  g.u = {0.8, 0, 0};
-  g.v = {0, 0.9, 0};
-  g.nu = 4;
-  g.nv = 3;
-  g.normal = {0.3, -0.2, 1};
-  g.samples = 1024;
+  const GridOptions g = grid({0.35, 0.05, 0.2}, {0.8, 0, 0}, {0, 0.9, 0}, 4, 3, 1024, {0.3, -0.2, 1});
   std::vector<double> readings;
   for (unsigned seed = 1; seed <= 8; ++seed)
     for (const GridPoint& p : measure_grid(g, mesh, tracer, state, {}, seed).points) readings.push_back(p.irradiance[0]);
@@ -131,12 +125,7 @@ TEST(Photometry, SensorUnderAnEmittingSquareReadsItsFormFactor) {
   const double x = a / h, s = std::sqrt(1 + x * x);
   const double f = 4 * (1 / (2 * std::numbers::pi)) * 2 * (x / s) * std::atan(x / s);
   for (const int samples : {1024, 16384}) {
-    GridOptions g;
-    g.origin = {-1e-3, -1e-3, 0};
-    g.u = {2e-3, 0, 0};
-    g.v = {0, 2e-3, 0};
-    g.nu = g.nv = 1;
-    g.samples = samples;
+    const GridOptions g = grid({-1e-3, -1e-3, 0}, {2e-3, 0, 0}, {0, 2e-3, 0}, 1, 1, samples);
     const GridResult r = measure_grid(g, mesh, tracer, state, {}, 7);
     const double sigma = 3.0 * std::sqrt(f * (1 - f) / samples);
     EXPECT_NEAR(r.points[0].irradiance[0], 3.0 * f, 4 * sigma) << samples << " samples, F = " << f;

@@ -166,13 +166,21 @@ std::string get_file_name(const toml::node& node, const ValueSource& src) {
   return name;
 }
 
-CameraOptions get_camera(const toml::table& table, const ValueSource& parent, size_t index) {
-  CameraOptions cam;
-  cam.name = fmt::format("camera{}", index);
+// Each entry of table `index` of an array of tables ([[camera]] and the
+// like), with where it came from (`camera[2].position`).
+template <typename F>
+void for_each_entry(const toml::table& table, const ValueSource& parent, size_t index, const F& f) {
   for (const auto& [k, node] : table) {
     ValueSource src = parent;
     src.key = fmt::format("{}[{}].{}", parent.key, index, std::string(k.str()));
-    const std::string key(k.str());
+    f(std::string(k.str()), node, src);
+  }
+}
+
+CameraOptions get_camera(const toml::table& table, const ValueSource& parent, size_t index) {
+  CameraOptions cam;
+  cam.name = fmt::format("camera{}", index);
+  for_each_entry(table, parent, index, [&](const std::string& key, const toml::node& node, const ValueSource& src) {
     if (key == "name") cam.name = get_file_name(node, src);
     else if (key == "position") cam.position = get_vec3(node, src);
     else if (key == "look_at") cam.look_at = get_vec3(node, src);
@@ -183,7 +191,7 @@ CameraOptions get_camera(const toml::table& table, const ValueSource& parent, si
     else if (key == "samples") cam.samples = static_cast<int>(positive_at_most(get_integer(node, src), 4096, src));
     else if (key == "exposure") cam.exposure = get_number(node, src);
     else bad_value(src, "unknown key");
-  }
+  });
   if (length(cam.look_at - cam.position) == 0.0) bad_value(parent, "camera position equals look_at");
   if (length(cross(cam.look_at - cam.position, cam.up)) == 0.0) bad_value(parent, "camera up is parallel to the view direction");
   return cam;
@@ -193,10 +201,7 @@ GridOptions get_grid(const toml::table& table, const ValueSource& parent, size_t
   GridOptions grid;
   grid.name = fmt::format("grid{}", index);
   bool has_origin = false, has_u = false, has_v = false;
-  for (const auto& [k, node] : table) {
-    ValueSource src = parent;
-    src.key = fmt::format("{}[{}].{}", parent.key, index, std::string(k.str()));
-    const std::string key(k.str());
+  for_each_entry(table, parent, index, [&](const std::string& key, const toml::node& node, const ValueSource& src) {
     if (key == "name") grid.name = get_file_name(node, src);
     else if (key == "origin") has_origin = (grid.origin = get_vec3(node, src), true);
     else if (key == "u") has_u = (grid.u = get_vec3(node, src), true);
@@ -206,7 +211,7 @@ GridOptions get_grid(const toml::table& table, const ValueSource& parent, size_t
     else if (key == "normal") grid.normal = get_vec3(node, src);
     else if (key == "samples") grid.samples = static_cast<int>(positive_at_most(get_integer(node, src), 1 << 20, src));
     else bad_value(src, "unknown key");
-  }
+  });
   if (!has_origin || !has_u || !has_v) bad_value(parent, fmt::format("grid {} needs `origin`, `u` and `v`", index));
   if (length(cross(grid.u, grid.v)) == 0.0 && length(grid.normal) == 0.0)
     bad_value(parent, fmt::format("grid '{}': u and v are parallel (or zero) and no `normal` is given", grid.name));
@@ -220,10 +225,7 @@ LightOptions get_light(const toml::table& table, const ValueSource& parent, size
   LightOptions light;
   light.name = fmt::format("light{}", index);
   bool placed = false;
-  for (const auto& [k, node] : table) {
-    ValueSource src = parent;
-    src.key = fmt::format("{}[{}].{}", parent.key, index, std::string(k.str()));
-    const std::string key(k.str());
+  for_each_entry(table, parent, index, [&](const std::string& key, const toml::node& node, const ValueSource& src) {
     if (key == "name") light.name = get_file_name(node, src);
     else if (key == "position") placed = (light.position = get_vec3(node, src), true);
     else if (key == "intensity_cd") light.intensity_cd = in_range(get_number(node, src), 0.0, 1e10, src);
@@ -232,7 +234,7 @@ LightOptions get_light(const toml::table& table, const ValueSource& parent, size
     else if (key == "nadir") light.nadir = get_vec3(node, src);
     else if (key == "c0") light.c0 = get_vec3(node, src);
     else bad_value(src, "unknown key");
-  }
+  });
   if (!placed) bad_value(parent, fmt::format("light {} needs a `position`", index));
   if ((light.intensity_cd > 0) == !light.ies.empty())
     bad_value(parent, fmt::format("light '{}' needs one of `intensity_cd` (isotropic) and `ies` (a photometric file)",
