@@ -91,11 +91,18 @@ TEST(Furnace, WithLocalLineFirstShotStaysUnbiased) {
 }
 
 TEST(EnergyBalance, ClosesInAClosedSceneWithNothingEscaping) {
-  const auto s = solve_classic_in_memory(furnace_scene(0.7, 1.0), test_options(500'000, 100'000, 0.05));
-  const double emitted = s.state.emitted_total();
-  EXPECT_LT(std::fabs(s.state.energy_residual()) / emitted, 1e-10);
-  // Robust Embree traversal and edge de-duplication: no line slips through a closed room.
-  EXPECT_LT((s.state.energy.escaped[0]) / emitted, 1e-6);
+  // Robust Embree traversal and edge de-duplication: no line slips through a
+  // closed room, at any scale (a millimetre room to a 200 m hall; one line
+  // escaping would carry about 1e-6 of the power).
+  for (const double scale : {1.0, 1e-3, 100.0}) {
+    Scene scene = furnace_scene(0.7, 1.0);
+    for (Polygon& p : scene.polygons)
+      for (Vec3& v : p.vertices) v = v * scale;
+    const auto s = solve_classic_in_memory(scene, test_options(500'000, 100'000, 0.05 * scale * scale));
+    const double emitted = s.state.emitted_total();
+    EXPECT_LT(std::fabs(s.state.energy_residual()) / emitted, 1e-10) << "scale " << scale;
+    EXPECT_LT((s.state.energy.escaped[0]) / emitted, 1e-9) << "scale " << scale;
+  }
 }
 
 // A millimetre emitting cube in a black kilometre room, near the origin and
