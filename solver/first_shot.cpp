@@ -140,8 +140,7 @@ uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState
         for (int c = 0; c < ch; ++c) a.escaped[c] += share[c];
         continue;
       }
-      const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
-      receive(state, mesh.patch_faces[hit.patch][side], share, a);
+      receive(state, mesh.face_met(hit.patch, dir), share, a);
     }
   });
   merge_received(acc, state);

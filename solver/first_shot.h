@@ -49,8 +49,7 @@ void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int fa
     for (int c = 0; c < state.channels; ++c) acc.escaped[c] += power[c];
     return;
   }
-  const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
-  receive(state, mesh.patch_faces[hit.patch][side], power, acc);
+  receive(state, mesh.face_met(hit.patch, dir), power, acc);
 }
 
 // A point source ([[light]]): its radiant power is added to the emitted

@@ -117,7 +117,7 @@ GridResult measure_grid(const GridOptions& grid, const PatchMesh& mesh, const Tr
       const size_t e = static_cast<size_t>(std::upper_bound(cdf.begin(), cdf.end(), uniform(rng) * emitted) - cdf.begin());
       const int face = emitters[std::min(e, emitters.size() - 1)];
       const int patch = mesh.face_patch[static_cast<size_t>(face)];
-      const Vec3 facing = mesh.face_side[static_cast<size_t>(face)] ? -mesh.patches[patch].normal : mesh.patches[patch].normal;
+      const Vec3 facing = mesh.face_normal(face);
       const Vec3 d = uniform_point(mesh, mesh.patches[patch], rng) - from;
       const double r = length(d);
       if (!(r > lift)) continue;
@@ -154,8 +154,7 @@ GridResult measure_grid(const GridOptions& grid, const PatchMesh& mesh, const Tr
       const Vec3 dir = cosine_direction(out.normal, u1, u2);
       const NearestHit hit = tracer.nearest(from, dir, 0.0, tfar);
       if (hit.patch < 0) continue;
-      const int side = dot(mesh.patches[hit.patch].normal, dir) < 0 ? 0 : 1;
-      const int face = mesh.patch_faces[hit.patch][side];
+      const int face = mesh.face_met(hit.patch, dir);
       if (face < 0) {  // the black back of a one-sided patch
         ++backs;
         continue;
@@ -242,7 +241,7 @@ nlohmann::json grid_json(const GridResult& grid) {
           {"samples", grid.options.samples},
           {"normal", {grid.normal.x, grid.normal.y, grid.normal.z}},
           {"illuminance_lux", {{"min", grid.min_lux}, {"mean", grid.mean_lux}, {"max", grid.max_lux}}},
-          {"uniformity", grid.mean_lux > 0 ? grid.min_lux / grid.mean_lux : 0.0},
+          {"uniformity", grid.uniformity()},
           {"mean_irradiance_W_m2", grid.mean_irradiance},
           {"csv", grid.options.name + ".csv"},
           {"png", grid.options.name + ".png"}};

@@ -29,6 +29,8 @@ struct GridResult {
   double min_lux = 0, mean_lux = 0, max_lux = 0;
   double mean_irradiance = 0;  // W/m2, mean of the channels
   size_t covered = 0;
+  // min / mean, as EN 12464 asks (0 for a dark grid).
+  double uniformity() const { return mean_lux > 0 ? min_lux / mean_lux : 0.0; }
 };
 
 // Irradiance at every point of the grid, gathered from the solution: the

@@ -102,8 +102,7 @@ Image render_camera(const CameraOptions& cam, const PatchMesh& mesh, const Trace
         const Vec3 dir = normalize(forward + right * (sx * half_w) + up * (sy * half_h));
         const NearestHit hit = tracer.nearest(cam.position, dir, 0.0, tfar);
         if (hit.patch < 0) continue;
-        const Patch& p = mesh.patches[hit.patch];
-        const int side = dot(p.normal, dir) < 0 ? 0 : 1;
+        const int side = mesh.side_met(hit.patch, dir);
         if (mesh.patch_faces[hit.patch][side] < 0) continue;  // the black back of a one-sided patch
         const auto b = shade(hit.patch, side, cam.position + dir * hit.t);
         for (int c = 0; c < 3; ++c) sum[c] += b[c];

@@ -180,7 +180,7 @@ void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& 
     record.outputs.push_back(grid.name + ".png");
     record.grids.push_back(grid_json(result));
     spdlog::info("grid {}: illuminance min {:.4g}, mean {:.4g}, max {:.4g} lx, uniformity {:.3f}", grid.name,
-                 result.min_lux, result.mean_lux, result.max_lux, result.mean_lux > 0 ? result.min_lux / result.mean_lux : 0.0);
+                 result.min_lux, result.mean_lux, result.max_lux, result.uniformity());
   }
   record.timings.outputs = seconds_since(start);
 }

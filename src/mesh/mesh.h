@@ -42,6 +42,10 @@ struct PatchMesh {
     return face_side[face] ? -n : n;
   }
   double face_area(int face) const { return patches[face_patch[face]].area; }
+  // The side of `patch` a line along `dir` meets (0 front, 1 back), and its
+  // face there (-1: the black back of a one-sided patch).
+  int side_met(int patch, const Vec3& dir) const { return dot(patches[patch].normal, dir) < 0 ? 0 : 1; }
+  int face_met(int patch, const Vec3& dir) const { return patch_faces[patch][side_met(patch, dir)]; }
 };
 
 // The most patches a mesh may have (about 10 GB of memory in all).
