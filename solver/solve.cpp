@@ -60,8 +60,10 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
   double faces_power = state.emitted_total(), lights_power = 0;
   for (const PointLight& l : lights) lights_power += l.power() * state.channels;
   const double total_power = faces_power + lights_power;
-  const auto share = [&](double power) {
-    return static_cast<long long>(std::llround(static_cast<double>(options.first_shot.lines) * power / total_power));
+  const auto share = [&](double power) {  // nothing emits at all (lights at multiplier 0): no lines
+    return total_power > 0
+               ? static_cast<long long>(std::llround(static_cast<double>(options.first_shot.lines) * power / total_power))
+               : 0LL;
   };
   record.shot = first_shot(mesh, tracer, state, lights.empty() ? options.first_shot.lines : share(faces_power),
                            options.lines.seed, record.threads, emitter_crossings(options, std::move(crossings)),
