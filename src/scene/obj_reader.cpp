@@ -119,7 +119,8 @@ Scene read_obj(const fs::path& path, std::vector<std::string>* warnings) {
       in.expect_count(t, 1, 64, "'mtllib file ...'");
       for (size_t i = 1; i < t.size(); ++i) {
         const fs::path mtl = path.parent_path() / std::string(t[i]);
-        if (!fs::exists(mtl)) notes.push_back(fmt::format("{}: material library '{}' not found", in.where(), mtl.string()));
+        std::error_code ec;  // a name the file system refuses (too long, ...) is not found either
+        if (!fs::exists(mtl, ec)) notes.push_back(fmt::format("{}: material library '{}' not found", in.where(), mtl.string()));
         else read_mtl(mtl, scene, defined_at, see_through);
       }
     } else if (key == "l" || key == "p") {
