@@ -104,8 +104,9 @@ void BoxFileWriter::write(const EncodedChunk& chunk) {
   chunks_.push_back(info);
 }
 
-void BoxCounts::resize(size_t patches, size_t wall_ars, size_t child_ars) {
+void BoxCounts::resize(size_t patches, size_t wall_ars, size_t child_ars, size_t class_span) {
   patch_crossings.assign(patches, 0);
+  class_crossings.assign(patches * 2 * class_span, 0);
   wall_lines.assign(wall_ars, 0);
   wall_open.assign(wall_ars, 0);
   child_crossings.assign(child_ars, 0);
@@ -121,6 +122,7 @@ void BoxCounts::add_counts(const BoxCounts& o) {
   sum(wall_lines, o.wall_lines);
   sum(wall_open, o.wall_open);
   sum(child_crossings, o.child_crossings);
+  sum(class_crossings, o.class_crossings);
 }
 
 void BoxCounts::add(const BoxCounts& o) {
@@ -166,8 +168,9 @@ void select_associated(const std::vector<std::pair<uint64_t, uint32_t>>& tallies
 
 void BoxFileWriter::finish(const BoxCounts& box_counts) {
   std::string counts_raw;
-  const std::vector<uint32_t>* arrays[] = {&box_counts.patch_crossings, &box_counts.wall_lines, &box_counts.wall_open,
-                                           &box_counts.child_crossings, &box_counts.associated};
+  const std::vector<uint32_t>* arrays[] = {&box_counts.patch_crossings, &box_counts.wall_lines,
+                                           &box_counts.wall_open,       &box_counts.child_crossings,
+                                           &box_counts.associated,      &box_counts.class_crossings};
   for (const auto* a : arrays) put_varint(counts_raw, a->size());
   for (const auto* a : arrays)
     for (uint32_t c : *a) put_varint(counts_raw, c);
@@ -256,11 +259,12 @@ BoxFileReader::BoxFileReader(const fs::path& path) : path_(path) {
   const auto* bytes = reinterpret_cast<const unsigned char*>(raw.data());
   size_t p = 0;
   std::vector<uint32_t>* arrays[] = {&counts_.patch_crossings, &counts_.wall_lines, &counts_.wall_open,
-                                     &counts_.child_crossings, &counts_.associated};
-  uint64_t sizes[5];
+                                     &counts_.child_crossings, &counts_.associated,  &counts_.class_crossings};
+  constexpr int kArrays = static_cast<int>(sizeof arrays / sizeof arrays[0]);
+  uint64_t sizes[kArrays];
   for (uint64_t& n : sizes)
     if (!get_varint(bytes, raw.size(), p, n) || n > raw.size()) fail("damaged crossing counts (sizes)");
-  for (int a = 0; a < 5; ++a) {
+  for (int a = 0; a < kArrays; ++a) {
     arrays[a]->resize(sizes[a]);
     for (uint32_t& c : *arrays[a]) {
       uint64_t v;

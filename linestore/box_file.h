@@ -15,7 +15,8 @@
 
 namespace mpath::linestore {
 
-inline constexpr uint32_t kFormatVersion = 3;  // 3: manifest file hashes by block_hash
+// 3: manifest file hashes by block_hash; 4: class crossings of transparent boxes
+inline constexpr uint32_t kFormatVersion = 4;
 
 // What a box file's lines tell about its box, besides the lines themselves
 // (docs/method.md, 6), all counted from the file's lines.
@@ -28,12 +29,17 @@ struct BoxCounts {
   // Per wall AR, kAssociated (patch + 1, count) pairs: the patches most often
   // met first by lines entering there, most often first (patch + 1 = 0: none).
   std::vector<uint32_t> associated;
+  // Transparent boxes (line sets) only: per patch of the box, per side (front,
+  // back) and per class the box's lines carry there (`span` of them, its own
+  // box's first), the crossings whose next crossing on that side's way is a
+  // patch of that class; index (patch * 2 + side) * span + class.
+  std::vector<uint32_t> class_crossings;
 
-  void resize(size_t patches, size_t wall_ars, size_t child_ars);
+  void resize(size_t patches, size_t wall_ars, size_t child_ars, size_t class_span = 0);
   // Adds the counts of `other` (another shard of the same box); associated
   // patches are merged by their counts.
   void add(const BoxCounts& other);
-  // The same for the four count arrays alone (not the associated patches).
+  // The same for the count arrays alone (not the associated patches).
   void add_counts(const BoxCounts& other);
   bool operator==(const BoxCounts&) const = default;
 };

@@ -34,14 +34,42 @@ ChunkTracer::ChunkTracer(const Options& options, const PatchMesh& mesh, const Hi
     offset += hierarchy.boxes[c].ar_count();
   }
   child_offset_.push_back(offset);
+  class_span_ = hierarchy.class_span(box);
+  if (class_span_ > 0)
+    for (int p : box_.patches) owner_.push_back(hierarchy.patch_box[static_cast<size_t>(p)]);
 }
 
 uint64_t ChunkTracer::lines_in(uint64_t chunk) const { return std::min(chunk_lines_, total_ - first_line(chunk)); }
 
 BoxTally ChunkTracer::empty_tally() const {
   BoxTally t;
-  t.counts.resize(box_.patches.size(), box_.ar_count(), child_offset_.back());
+  t.counts.resize(box_.patches.size(), box_.ar_count(), child_offset_.back(), static_cast<size_t>(class_span_));
   return t;
+}
+
+void ChunkTracer::count_classes(const std::vector<linestore::Event>& events, linestore::BoxCounts& counts) const {
+  // The pair of crossings i and i + dir belongs to the smallest box holding
+  // both patches (off the line: the outside, the root's); a subscene's line
+  // leaving it carries no pair. Counted on the side of patch i that faces
+  // crossing i + dir, as the solver's face_towards picks it.
+  const int n = static_cast<int>(events.size());
+  const bool root = box_index_ == 0;
+  for (int i = 0; i < n; ++i) {
+    const int a = owner_[events[i].id];
+    for (const int dir : {+1, -1}) {
+      const int j = i + dir;
+      int k;
+      if (j < 0 || j >= n) {
+        if (!root) continue;
+        k = hierarchy_.boxes[a].depth;
+      } else {
+        k = hierarchy_.boxes[a].depth -
+            hierarchy_.boxes[hierarchy_.common_box(a, owner_[events[j].id])].depth;
+      }
+      const int side = (dir > 0) == events[i].along ? 0 : 1;
+      counts.class_crossings[(size_t{events[i].id} * 2 + side) * class_span_ + k]++;
+    }
+  }
 }
 
 void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const {
@@ -111,6 +139,7 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
       counts.patch_crossings[local]++;
     }
     while (next_child < children.size()) record.events.push_back(children[next_child++].event);
+    if (class_span_ > 0) count_classes(record.events, counts);
     if (walls) {
       counts.wall_lines[record.entry_ar]++;
       counts.wall_lines[record.exit_ar]++;

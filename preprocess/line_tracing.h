@@ -38,6 +38,9 @@ class ChunkTracer {
   void trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const;
 
  private:
+  // Transparent boxes: adds a line's pairs of consecutive crossings to the class counts.
+  void count_classes(const std::vector<linestore::Event>& events, linestore::BoxCounts& counts) const;
+
   const PatchMesh& mesh_;
   const Hierarchy& hierarchy_;
   const SceneBox& box_;
@@ -48,6 +51,8 @@ class ChunkTracer {
   unsigned long long seed_;
   uint64_t total_, chunk_lines_, chunks_;
   std::vector<uint32_t> child_offset_;  // first AR of each child in the child-crossing counts
+  int class_span_ = 0;                  // transparent boxes: classes counted per patch side
+  std::vector<int> owner_;              // transparent boxes: per patch of the box, the box holding it
 };
 
 }  // namespace mpath

@@ -185,8 +185,7 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
   open_files(options.store.dir, manifest_path);
   for (size_t b = 0; b < boxes_.size(); ++b) derive_box_data(mesh, b);
   if (hierarchy_.transparent)
-    line_sets_ = std::make_shared<const LineSets>(
-        derive_line_sets(*this, mesh, tbb::this_task_arena::max_concurrency()));
+    line_sets_ = std::make_shared<const LineSets>(derive_line_sets(*this, mesh));
 }
 
 void BoxStore::check_against(const Options& options, const PatchMesh& mesh, const fs::path& manifest_path) {
@@ -234,7 +233,7 @@ void BoxStore::lay_out_boxes(const PatchMesh& mesh) {
       box.child_ar_base.push_back(offset);
       offset += hierarchy_.boxes[c].ar_count();
     }
-    box.counts.resize(sb.patches.size(), sb.ar_count(), offset);
+    box.counts.resize(sb.patches.size(), sb.ar_count(), offset, static_cast<size_t>(hierarchy_.class_span(static_cast<int>(b))));
   }
 }
 
@@ -271,10 +270,12 @@ void BoxStore::verify_files(const fs::path& dir, const fs::path& manifest_path) 
 }
 
 void BoxStore::open_files(const fs::path& dir, const fs::path& manifest_path) {
-  // Files, box by box, in line order.
+  // Files, box by box, in line order; a shard's empty part (a box with fewer
+  // chunks than shards) before the part that starts where it would.
   auto files = manifest_.files;
-  std::sort(files.begin(), files.end(),
-            [](const auto& a, const auto& b) { return std::tie(a.box, a.first_line) < std::tie(b.box, b.first_line); });
+  std::sort(files.begin(), files.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.box, a.first_line, a.lines) < std::tie(b.box, b.first_line, b.lines);
+  });
   std::vector<uint64_t> next_line(boxes_.size(), 0);
   for (const linestore::StoreFile& f : files) {
     const fs::path path = dir / f.name;

@@ -37,49 +37,28 @@ void check_chunk(const StoreBox& box, const linestore::DecodedChunk& chunk, int 
 struct SlotCounts {
   std::vector<double> crossings;  // by the slot's box: crossings of the face in the direction it faces
   std::vector<double> carriers;   // by any box: crossings that carry the slot's class
-  std::vector<double> entries;    // by one box, per entry of the box: the same
 };
 
-void count_box(const BoxStore& store, LineSets& sets, int x, int threads, SlotCounts& counts) {
+// Box x's part of the counts, from the class crossings its store files hold
+// (counted by mpath-preprocess while tracing; a face meets the box's lines as
+// often as its patch does).
+void count_box(const BoxStore& store, const Hierarchy& h, LineSets& sets, int x, SlotCounts& counts) {
   const StoreBox& box = store.box(x);
   LineSetBox& lines = sets.boxes[x];
-  const uint64_t chunks = box.chunks.size();
-  const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
-  const size_t slots = sets.slots();
-  std::vector<SlotCounts> part(shards);
-  for_each_shard(shards, [&](int s) {
-    SlotCounts& p = part[s];
-    for (auto* v : {&p.crossings, &p.carriers}) v->assign(slots, 0.0);
-    p.entries.assign(lines.slot.size(), 0.0);
-    linestore::DecodedChunk chunk;
-    for (uint64_t c = chunks * s / shards; c < chunks * (s + 1) / shards; ++c) {
-      store.read(x, c, chunk);
-      check_chunk(box, chunk, x, c);
-      for (size_t l = 0; l < chunk.lines(); ++l) {
-        const Event* ev = chunk.events.data() + chunk.first[l];
-        const int n = static_cast<int>(chunk.first[l + 1] - chunk.first[l]);
-        for (int i = 0; i < n; ++i)
-          for (const int dir : {+1, -1}) {
-            const int face = face_towards(box, ev[i], dir);
-            if (face < 0) continue;
-            const uint32_t own = lines.slot[lines.entry[face + 1] - 1];  // this box's own class at the face
-            const int k = pair_class(sets, lines, x == 0, ev, n, i, i + dir);
-            p.crossings[own] += 1;
-            if (k < 0) continue;
-            p.carriers[sets.face_slot[box.face_global[face]] + k] += 1;
-            p.entries[lines.entry[face] + k] += 1;
-          }
+  const size_t span = static_cast<size_t>(h.class_span(x));
+  lines.carried.assign(lines.slot.size(), 0.0);
+  for (size_t k = 0; k < box.local_faces.size(); ++k)
+    for (size_t side = 0; side < 2; ++side) {
+      const int face = box.local_faces[k][side];
+      if (face < 0) continue;
+      const uint32_t first = lines.entry[face], end = lines.entry[face + 1];
+      counts.crossings[lines.slot[end - 1]] += box.counts.patch_crossings[k];  // this box's own class at the face
+      for (uint32_t e = first; e < end; ++e) {
+        const double n = box.counts.class_crossings[(k * 2 + side) * span + (e - first)];
+        lines.carried[e] = n;
+        counts.carriers[lines.slot[e]] += n;
       }
     }
-  });
-  lines.carried.assign(lines.slot.size(), 0.0);
-  for (const SlotCounts& p : part) {
-    for (size_t i = 0; i < slots; ++i) {
-      counts.crossings[i] += p.crossings[i];
-      counts.carriers[i] += p.carriers[i];
-    }
-    for (size_t e = 0; e < p.entries.size(); ++e) lines.carried[e] += p.entries[e];
-  }
 }
 
 // The shares of a face's power among its classes (its own box first, the
@@ -101,7 +80,7 @@ bool face_shares(const SlotCounts& counts, uint32_t first, uint32_t end, double*
 
 }  // namespace
 
-LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh, int threads) {
+LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh) {
   const Hierarchy& h = store.hierarchy();
   LineSets sets;
   for (const SceneBox& b : h.boxes) {
@@ -133,7 +112,7 @@ LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh, int thre
   }
   SlotCounts counts;
   for (auto* v : {&counts.crossings, &counts.carriers}) v->assign(sets.slots(), 0.0);
-  for (size_t x = 0; x < store.box_count(); ++x) count_box(store, sets, static_cast<int>(x), threads, counts);
+  for (size_t x = 0; x < store.box_count(); ++x) count_box(store, h, sets, static_cast<int>(x), counts);
   sets.alpha.assign(sets.slots(), 0.0);
   for (size_t f = 0; f < faces; ++f)
     if (!face_shares(counts, sets.face_slot[f], sets.face_slot[f + 1], &sets.alpha[sets.face_slot[f]]))

@@ -38,19 +38,16 @@ struct LineSets {
   std::vector<double> alpha;        // per slot: the share of the face's power in that class
   std::vector<int> uncarried;       // faces no line can carry: shot with local lines
   size_t slots() const { return face_slot.back(); }
-  // The smallest box holding boxes a and b.
+  // The smallest box holding boxes a and b (from these flat arrays: the passes' hot loop asks).
   int common_box(int a, int b) const {
-    while (a != b) {
-      if (depth[a] >= depth[b]) a = parent[a];
-      else b = parent[b];
-    }
-    return a;
+    return common_ancestor(a, b, [this](int x) { return depth[x]; }, [this](int x) { return parent[x]; });
   }
 };
 
-// Reads every line of the store once (in parallel) to count, per box and
-// face, the crossings and the pairs the box carries.
-LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh, int threads);
+// The classes, slots and shares, from the crossing counts of the store's
+// files (the preprocessor counted, per box and patch side, the crossings and
+// the pairs the box carries while it traced; no line is read here).
+LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh);
 
 // One iteration: every box's pass, deepest first, then the root (a class's
 // first carrier is its own box); then the uncarried faces' power shot with

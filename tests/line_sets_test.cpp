@@ -11,6 +11,8 @@
 
 #include "config.h"
 #include "line_sets.h"
+#include "prepared_scene.h"
+#include "preprocess.h"
 #include "test_util.h"
 
 namespace mpath {
@@ -96,6 +98,54 @@ TEST(LineSets, FurnishedFurnacesAreExactAndTheirErrorFallsAsMultipaths) {
     EXPECT_GT(h[0].abs_error / h[1].abs_error, 1.6) << "seed " << seed << ": " << h[0].abs_error << " at 500k, "
                                                      << h[1].abs_error << " at 2M";
   }
+}
+
+// The class counts mpath-preprocess writes while tracing (per box, patch
+// side and class) are the counts of the stored lines themselves, counted here
+// again from every line of a nested hierarchy traced in three shards (whose
+// files' counts the store adds up): the shares and MIS weights of the passes
+// rest on them.
+TEST(LineSets, StoredClassCountsAreThoseOfTheStoredLines) {
+  TempDir dir;
+  Options o = test::test_options(300'000, 100'000, 0.02);
+  o.scene.file = furnace(dir, 0.5, 3, 10);
+  o.scene.two_sided = {"panel"};
+  o.store.dir = dir / "store";
+  o.solver.method = SolverMethod::hierarchical;
+  o.hierarchy.max_depth = 3;
+  o.store.chunk_lines = 20'000;
+  for (int shard = 1; shard <= 3; ++shard) run_preprocess(o, ShardSpec{shard, 3});
+  const PreparedScene prepared = prepare_scene(o);
+  const BoxStore store(o, prepared.mesh);
+  const Hierarchy& h = store.hierarchy();
+  ASSERT_GE(h.max_depth(), 2);
+  size_t counted = 0;
+  for (size_t x = 0; x < store.box_count(); ++x) {
+    const StoreBox& box = store.box(static_cast<int>(x));
+    const SceneBox& sb = h.boxes[x];
+    const size_t span = static_cast<size_t>(h.max_depth() - sb.depth + 1);
+    std::vector<uint32_t> expected(sb.patches.size() * 2 * span, 0);
+    linestore::DecodedChunk chunk;
+    for (uint64_t c = 0; c < box.chunks.size(); ++c) {
+      store.read(static_cast<int>(x), c, chunk);
+      for (size_t l = 0; l < chunk.lines(); ++l) {
+        const int n = static_cast<int>(chunk.first[l + 1] - chunk.first[l]);
+        const linestore::Event* ev = chunk.events.data() + chunk.first[l];
+        for (int i = 0; i < n; ++i)
+          for (const int dir : {+1, -1}) {
+            const int j = i + dir;
+            const int a = h.patch_box[sb.patches[ev[i].id]];
+            if ((j < 0 || j >= n) && x != 0) continue;  // a subscene's line leaving it carries no pair
+            const int common = (j < 0 || j >= n) ? 0 : h.common_box(a, h.patch_box[sb.patches[ev[j].id]]);
+            const size_t side = (dir > 0) == ev[i].along ? 0 : 1;
+            ++expected[(ev[i].id * 2 + side) * span + static_cast<size_t>(h.boxes[a].depth - h.boxes[common].depth)];
+            ++counted;
+          }
+      }
+    }
+    EXPECT_EQ(box.counts.class_crossings, expected) << "box " << x;
+  }
+  EXPECT_GT(counted, 1'000'000u);
 }
 
 // Subscenes inside subscenes (shelves whose books group, tables with items):
@@ -194,7 +244,9 @@ TEST(LineSets, AgreeWithMultipathObjectByObjectOnTheShippedRoom) {
     o.store.dir = dir / ("store" + std::to_string(seed) + (method == SolverMethod::multipath ? "m" : "h"));
     test::StoredSolve s = test::solve_stored(o);
     EXPECT_TRUE(s.log.converged);
-    if (method == SolverMethod::hierarchical) EXPECT_GE(s.boxes, 2u);
+    if (method == SolverMethod::hierarchical) {
+      EXPECT_GE(s.boxes, 2u);
+    }
     Run r;
     for (size_t f = 0; f < s.mesh.face_count(); ++f)
       r.reflected.push_back(s.state.radiosity(s.mesh, f)[0] - s.state.face_exitance(f)[0]);

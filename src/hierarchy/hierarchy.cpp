@@ -411,6 +411,10 @@ int Hierarchy::max_depth() const {
   return d;
 }
 
+int Hierarchy::common_box(int a, int b) const {
+  return common_ancestor(a, b, [&](int x) { return boxes[x].depth; }, [&](int x) { return boxes[x].parent; });
+}
+
 size_t Hierarchy::ar_total() const {
   size_t n = 0;
   for (size_t b = 1; b < boxes.size(); ++b) n += boxes[b].ar_count();

@@ -13,6 +13,16 @@
 
 namespace mpath {
 
+// The smallest box holding boxes a and b, given each box's depth and parent.
+template <typename Depth, typename Parent>
+int common_ancestor(int a, int b, const Depth& depth, const Parent& parent) {
+  while (a != b) {
+    if (depth(a) >= depth(b)) a = parent(a);
+    else b = parent(b);
+  }
+  return a;
+}
+
 struct Hierarchy {
   std::vector<SceneBox> boxes;       // 0 is the root; parents before children
   std::vector<int> patch_box;        // patch -> box holding it directly
@@ -22,6 +32,12 @@ struct Hierarchy {
   bool transparent = false;
   int max_depth() const;
   size_t ar_total() const;
+  // The smallest box holding boxes a and b.
+  int common_box(int a, int b) const;
+  // Transparent boxes (line sets): how many classes a patch of box `box` can
+  // be in for that box's lines, from its own box's up to `box`'s (the width of
+  // the box's per-side class counts; docs/store-format.md); 0 otherwise.
+  int class_span(int box) const { return transparent ? max_depth() - boxes[box].depth + 1 : 0; }
 };
 
 // Builds the hierarchy of `mesh` (VP grids from vp_area_ratio or vp_grid); `flat` (or hierarchy.max_depth = 0): the
