@@ -288,6 +288,8 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     flight.used[slot] = 0;
   }
   const std::vector<ChunkPart>& parts = flight.parts[x];
+  SetResult result;
+  if (parts.empty()) return result;  // the boxes above carry this box's classes in this pass
   const bool every_line = flight.fraction[x] >= 1.0;
   PassContext in{&box, &lines, &sets, {}, {}, x == 0, !every_line};
   const size_t faces = box.face_global.size();
@@ -333,7 +335,6 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   // Merge in shard order: the quota sent; what was gathered and not sent
   // goes to the pools of the classes this box carries, what waits for the
   // boxes above to theirs.
-  SetResult result;
   for (size_t f = 0; f < faces; ++f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
     const FaceIn& face = in.faces[f];
@@ -397,9 +398,11 @@ void plan_iteration(const BoxStore& store, const LineSets& sets, const Radiosity
   const double coverage = store.box(0).coverage;
   for (size_t x = 0; x < boxes; ++x) {
     const StoreBox& box = store.box(static_cast<int>(x));
-    if (power_per_line > 0 && box.lines > 0)
-      flight.fraction[x] = std::clamp(power / (power_per_line * static_cast<double>(store.lines())), coverage, 1.0);
-    flight.parts[x] = pass_parts(store, static_cast<int>(x), flight.fraction[x], pass);
+    if (power_per_line > 0 && box.lines > 0) {
+      const double wanted = std::min(1.0, power / (power_per_line * static_cast<double>(store.lines())));
+      flight.fraction[x] = x == 0 ? std::max(wanted, coverage) : (wanted < coverage ? 0.0 : wanted);
+    }
+    if (flight.fraction[x] > 0) flight.parts[x] = pass_parts(store, static_cast<int>(x), flight.fraction[x], pass);
     if (flight.fraction[x] < 1.0 && box.lines > 0) {
       uint64_t lines = 0;
       for (const ChunkPart& p : flight.parts[x]) lines += p.lines;
