@@ -74,6 +74,23 @@ TEST(Config, OutOfRangeAndUnknownChoicesAreRejected) {
             std::string::npos);
 }
 
+// An entry of a table ([scene.emitters], [scene.materials], [[camera]]) is
+// named where it was written: its line in the file, or the command line for
+// an override, even when the file holds other entries of the same table.
+TEST(Config, TableEntriesNameTheirOwnSource) {
+  TempDir dir;
+  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n[scene.materials]\nwall = 0.5\nfloor = 3\n");
+  std::string e = error_of(dir / "run.toml");
+  EXPECT_NE(e.find("run.toml:4: config key 'scene.materials.floor'"), std::string::npos) << e;
+  write_file(dir / "ok.toml", "scene.file = \"a.obj\"\n[scene.materials]\nwall = 0.5\n");
+  e = error_of(dir / "ok.toml", {"scene.materials.floor=3"});
+  EXPECT_NE(e.find("command line: config key 'scene.materials.floor'"), std::string::npos) << e;
+  e = error_of(dir / "ok.toml", {"scene.emitters.lamp=-1"});
+  EXPECT_NE(e.find("command line: config key 'scene.emitters.lamp'"), std::string::npos) << e;
+  e = error_of(dir / "ok.toml", {"camera=[{position=[0,0,1], look_at=[0,0,0], width=0}]"});
+  EXPECT_NE(e.find("command line: config key 'camera[0].width'"), std::string::npos) << e;
+}
+
 TEST(Config, MalformedTomlAndMissingFilesAreReported) {
   TempDir dir;
   write_file(dir / "bad.toml", "scene.file = \"a.obj\"\n[solver\n");

@@ -130,6 +130,24 @@ toml::array one(T&& value) {
   return out;
 }
 
+// The source of `node`, an entry `name` of the table read from `parent`: its
+// own line in the config file, or the command line when an override put it
+// there (a table may hold entries of both).
+ValueSource entry_source(const ValueSource& parent, const std::string& key, const toml::node& node) {
+  ValueSource src = parent;
+  src.key = key;
+  if (const auto& path = node.source().path; path) {
+    src.where = fmt::format("{}:{}", *path, node.source().begin.line);
+    src.from_command_line = false;
+    src.base_dir = std::filesystem::path(*path).parent_path();
+  } else {
+    src.where = "command line";
+    src.from_command_line = true;
+    src.base_dir = std::filesystem::current_path();
+  }
+  return src;
+}
+
 // A table `material = [r, g, b]` of the config into a map of Options.
 ConfigKey rgb_table_key(const char* key, const char* help, std::map<std::string, Rgb> SceneOptions::*member,
                         const char* what, double most) {
@@ -139,11 +157,9 @@ ConfigKey rgb_table_key(const char* key, const char* help, std::map<std::string,
             if (!t) bad_value(s, fmt::format("expected a table of material = [r, g, b], got {}", type_name(n)));
             auto& out = o.scene.*member;
             out.clear();
-            for (const auto& [name, value] : *t) {
-              ValueSource e = s;
-              e.key = s.key + "." + std::string(name.str());
-              out[std::string(name.str())] = get_rgb(value, e, what, most);
-            }
+            for (const auto& [name, value] : *t)
+              out[std::string(name.str())] =
+                  get_rgb(value, entry_source(s, s.key + "." + std::string(name.str()), value), what, most);
           },
           [=](const Options& o) {
             toml::table table;
@@ -170,11 +186,8 @@ std::string get_file_name(const toml::node& node, const ValueSource& src) {
 // like), with where it came from (`camera[2].position`).
 template <typename F>
 void for_each_entry(const toml::table& table, const ValueSource& parent, size_t index, const F& f) {
-  for (const auto& [k, node] : table) {
-    ValueSource src = parent;
-    src.key = fmt::format("{}[{}].{}", parent.key, index, std::string(k.str()));
-    f(std::string(k.str()), node, src);
-  }
+  for (const auto& [k, node] : table)
+    f(std::string(k.str()), node, entry_source(parent, fmt::format("{}[{}].{}", parent.key, index, std::string(k.str())), node));
 }
 
 CameraOptions get_camera(const toml::table& table, const ValueSource& parent, size_t index) {
