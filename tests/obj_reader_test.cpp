@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
+#include "coplanar_overlap.h"
 #include "error.h"
 #include "scene_readers.h"
 #include "test_util.h"
@@ -132,6 +134,77 @@ TEST(SceneLoader, WarnsOfDuplicatedPolygons) {
   load_scene(o, 16, w);
   ASSERT_EQ(w.size(), 1u);
   EXPECT_EQ(w[0].find("2 polygon(s) have the same vertices as another"), 0u) << w[0];
+}
+
+// Coplanar polygons facing the same way that share area are found; tiles
+// side by side, back-to-back faces, parallel faces a centimetre apart and
+// exact duplicates (warned of on their own) are not.
+TEST(SceneLoader, FindsCoplanarOverlapsAndNothingElse) {
+  auto square = [](Scene& s, double x, double y, double w, double z = 0, bool down = false) {
+    const Vec3 a{x, y, z}, b{x + w, y, z}, c{x + w, y + w, z}, d{x, y + w, z};
+    if (down) test::add_quad(s, d, c, b, a, 0, 0);
+    else test::add_quad(s, a, b, c, d, 0, 0);
+  };
+  auto found = [](const Scene& s) { return find_coplanar_overlaps(s).polygons; };
+  auto scene = [] {
+    Scene s;
+    test::add_material(s, "m", 0.5, 0);
+    test::add_object(s, "o");
+    return s;
+  };
+  Scene s = scene();
+  square(s, 0, 0, 1);
+  square(s, 0.5, 0.5, 1);  // overlaps a quarter
+  EXPECT_EQ(found(s), 2u);
+  s = scene();
+  square(s, 0, 0, 1);
+  square(s, 0.25, 0.25, 0.5);  // a decal inside
+  EXPECT_EQ(found(s), 2u);
+  s = scene();
+  square(s, 0, 0, 1);
+  s.polygons.push_back(Polygon{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}, 0, 0});  // half of it, corners on its corners
+  EXPECT_EQ(found(s), 2u);
+  s = scene();
+  square(s, 0, 0, 1);
+  square(s, 1, 0, 1);         // side by side
+  square(s, 0, 1, 1);         // side by side
+  square(s, 3, 0, 1);         // apart
+  square(s, 0, 0, 1, 0, true);  // back to back with the first
+  square(s, 0, 0, 1, 0.01);   // a centimetre above
+  square(s, 3, 0, 1);         // an exact duplicate
+  EXPECT_EQ(found(s), 0u);
+  // Random tilings (many seeds): tiles of a grid never overlap; one tile
+  // moved by a random fraction of its size overlaps its neighbours.
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> shift(0.05, 0.95);
+    s = scene();
+    const int n = 4 + static_cast<int>(seed % 5);
+    const double w = 0.3 + 0.1 * (seed % 3), z = 0.7 * seed;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) square(s, i * w, j * w, w, z);
+    EXPECT_EQ(found(s), 0u) << "seed " << seed;
+    square(s, shift(rng) * w, shift(rng) * w, w, z);
+    const CoplanarOverlaps o = find_coplanar_overlaps(s);
+    EXPECT_GE(o.polygons, 2u) << "seed " << seed;
+    EXPECT_EQ(o.second, n * n) << "seed " << seed;  // the moved tile is in the first pair
+  }
+}
+
+// load_scene names the first overlapping pair in its warning.
+TEST(SceneLoader, WarnsOfCoplanarOverlaps) {
+  TempDir dir;
+  write_file(dir / "d.mtl", "newmtl light\nKd 0.5 0.5 0.5\n");
+  write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\no wall\nv 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\n"
+                            "f 1 2 3 4\no poster\nv 0.5 0.5 0\nv 1 0.5 0\nv 1 1 0\nv 0.5 1 0\nf 5 6 7 8\n");
+  SceneOptions o;
+  o.file = dir / "d.obj";
+  o.emitters["light"] = {1, 1, 1};
+  std::vector<std::string> w;
+  load_scene(o, 16, w);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("2 polygon(s) overlap a coplanar polygon facing the same way (first: polygon 1 of object "
+                      "'wall' and polygon 2 of object 'poster')"), std::string::npos) << w[0];
 }
 
 TEST(SceneLoader, RejectsUnknownFormatsMissingFilesAndDarkScenes) {

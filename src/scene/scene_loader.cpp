@@ -6,6 +6,7 @@
 #include <set>
 #include <vector>
 
+#include "coplanar_overlap.h"
 #include "error.h"
 #include "scene_readers.h"
 
@@ -102,6 +103,15 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
     warnings.push_back(fmt::format(
         "{} polygon(s) have the same vertices as another (duplicated faces): coincident surfaces are seen by "
         "chance by the lines and the methods light them differently; remove the duplicates", repeated));
+  if (const CoplanarOverlaps o = find_coplanar_overlaps(scene); o.polygons > 0) {
+    auto name = [&](int p) {
+      return fmt::format("polygon {} of object '{}'", p + 1, scene.objects.at(scene.polygons[p].object).name);
+    };
+    warnings.push_back(fmt::format(
+        "{} polygon(s) overlap a coplanar polygon facing the same way (first: {} and {}): where they overlap the "
+        "lines meet one of them by chance and the methods light them differently; remove the overlap or offset "
+        "one of them", o.polygons, name(o.first), name(o.second)));
+  }
   const bool any_emitter = std::any_of(scene.polygons.begin(), scene.polygons.end(),
                                        [&](const Polygon& p) { return scene.materials[p.material].emits(); });
   if (!any_emitter && options.lights.empty())
