@@ -145,6 +145,7 @@ CoplanarOverlaps find_coplanar_overlaps(const Scene& scene, size_t budget) {
         const Flat& a = flats[group[x]];
         for (size_t y = x + 1; y < group.size() && flats[group[y]].lo_u < a.hi_u - eps && budget > 0; ++y) {
           const Flat& b = flats[group[y]];
+          --budget;  // a box test counts too: a column of a million tiles is no hang
           if (b.lo_v >= a.hi_v - eps || a.lo_v >= b.hi_v - eps) continue;
           if (same_vertex_set(scene.polygons[a.polygon], scene.polygons[b.polygon])) continue;
           if (!overlap(a, b, eps, budget)) continue;

@@ -23,7 +23,8 @@ struct CoplanarOverlaps {
 // vertex or edge midpoint of one strictly inside the other). Polygons with
 // the same vertex set are left out (load_scene warns of them already).
 // Candidate pairs come from a sweep over bounding boxes per plane; at most
-// `budget` edge pairs are compared in all.
+// `budget` box tests and edge pairs are compared in all (then the search
+// stops with what it found).
 CoplanarOverlaps find_coplanar_overlaps(const Scene& scene, size_t budget = 200'000'000);
 
 }  // namespace mpath
