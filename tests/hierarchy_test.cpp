@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <random>
 
 #include <nlohmann/json.hpp>
 
@@ -141,6 +142,87 @@ TEST(Hierarchy, OneObjectForTheWholeSceneIsSplitIntoItsConnectedParts) {
   for (int b : h.boxes[0].children) {
     EXPECT_EQ(h.boxes[b].objects.size(), 5u);  // a top and four legs, as parts
     EXPECT_NEAR(h.boxes[b].bounds.size().x, 0.8, 1e-12);
+  }
+}
+
+// The grouping finds candidate pairs and intruding items in a spatial grid;
+// the hierarchy must be the one that comparing every pair builds, on random
+// rooms of boxes of every size (flat, thin, tiny, large, touching,
+// overlapping), at depth 1 and 3, on the shipped room and on office2.
+TEST(Hierarchy, TheGridBuildsTheHierarchyThatComparingEveryPairBuilds) {
+  auto same = [](const PatchMesh& mesh, const HierarchyOptions& o, const std::string& what) {
+    const Hierarchy grid = build_hierarchy(mesh, o, false);
+    const Hierarchy all = build_hierarchy(mesh, o, false, true);
+    EXPECT_EQ(describe_hierarchy(grid, {}), describe_hierarchy(all, {})) << what;
+    EXPECT_EQ(grid.patch_box, all.patch_box) << what;
+    return grid.boxes.size();
+  };
+  size_t subscenes = 0;
+  for (unsigned seed = 1; seed <= 12; ++seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0, 1);
+    Scene scene;
+    const int m = test::add_material(scene, "grey", 0.5, 0);
+    test::add_box(scene, {0, 0, 0}, {6, 5, 3}, true, m, test::add_object(scene, "room"));
+    const int n = 20 + static_cast<int>(seed * 7 % 60);
+    for (int k = 0; k < n; ++k) {
+      // Sizes from a millimetre to a metre and a half, some flat or thin.
+      Vec3 size{0.001 + 1.5 * std::pow(u(rng), 3), 0.001 + 1.5 * std::pow(u(rng), 3), 0.001 + 1.5 * std::pow(u(rng), 3)};
+      if (k % 5 == 0) size.z = 0.0;
+      const Vec3 lo{u(rng) * (6 - size.x), u(rng) * (5 - size.y), k % 3 == 0 ? 0.0 : u(rng) * (3 - size.z)};
+      const int object = test::add_object(scene, "item" + std::to_string(k));
+      if (size.z == 0.0)
+        test::add_quad(scene, lo, lo + Vec3{size.x, 0, 0}, lo + Vec3{size.x, size.y, 0}, lo + Vec3{0, size.y, 0}, m,
+                       object);
+      else
+        test::add_box(scene, lo, lo + size, false, m, object);
+    }
+    const PatchMesh mesh = build_mesh(scene, 0.05);
+    for (const int depth : {1, 3}) {
+      HierarchyOptions o;
+      o.max_depth = depth;
+      subscenes += same(mesh, o, "seed " + std::to_string(seed) + ", depth " + std::to_string(depth)) - 1;
+    }
+  }
+  EXPECT_GT(subscenes, 24u);  // the layouts do group
+  // Pairs near the farthest apart that still group: equal cubes of side a
+  // group up to 5 a apart (quotient 6 / (5 + 2 d / a) > 0.4), flat squares
+  // side by side up to about 1.5 a apart.
+  for (const double gap : {0.5, 2.0, 4.0, 4.9}) {
+    Scene scene;
+    const int m = test::add_material(scene, "grey", 0.5, 0);
+    test::add_box(scene, {0, 0, 0}, {20, 20, 10}, true, m, test::add_object(scene, "room"));
+    for (int k = 0; k < 4; ++k) {  // cubes of side 0.4, 0.5, 0.6, 0.7 in pairs, each pair `gap` sides apart
+      const double a = 0.4 + 0.1 * k, x = 1 + 10 * (k % 2), y = 1 + 9 * (k / 2);
+      // Each cube has a small cube inside it, so that a pair holds the 24
+      // polygons a subscene needs.
+      for (const double x0 : {x, x + a + gap * a}) {
+        const int object = test::add_object(scene, "cube" + std::to_string(k) + (x0 == x ? "a" : "b"));
+        test::add_box(scene, {x0, y, 1}, {x0 + a, y + a, 1 + a}, false, m, object);
+        test::add_box(scene, {x0 + 0.25 * a, y + 0.25 * a, 1.25}, {x0 + 0.75 * a, y + 0.75 * a, 1.3}, false, m, object);
+      }
+      const double f = 1 + 0.3 * gap;  // flat squares on a shelf plane
+      for (int j = 0; j < 12; ++j) {  // two stacks of 12 flat squares
+        const double z = 3 + 0.01 * j;
+        test::add_quad(scene, {x, y + 4, z}, {x + a, y + 4, z}, {x + a, y + 4 + a, z}, {x, y + 4 + a, z}, m,
+                       test::add_object(scene, "p" + std::to_string(k)));
+        test::add_quad(scene, {x + f * a, y + 4, z + 0.2}, {x + (f + 1) * a, y + 4, z + 0.2},
+                       {x + (f + 1) * a, y + 4 + a, z + 0.2}, {x + f * a, y + 4 + a, z + 0.2}, m,
+                       test::add_object(scene, "q" + std::to_string(k)));
+      }
+    }
+    HierarchyOptions o;
+    o.max_depth = 3;
+    const size_t boxes = same(build_mesh(scene, 0.5), o, "gap " + std::to_string(gap));
+    EXPECT_GE(boxes, 5u) << "gap " << gap;  // every cube pair is a subscene
+  }
+  for (const std::string& file :
+       {std::string(MPATH_SOURCE_DIR) + "/configs/room/room.obj", test::shared_scene("office2/office2.mgf").string()}) {
+    SceneOptions so;
+    so.file = file;
+    std::vector<std::string> warnings;
+    const PatchMesh mesh = build_mesh(load_scene(so, 16, warnings), 0.01);
+    EXPECT_GT(same(mesh, HierarchyOptions{}, file), 1u) << file;
   }
 }
 

@@ -8,10 +8,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
+#include <memory>
 #include <numeric>
 #include <queue>
 #include <set>
+#include <unordered_map>
 
 namespace mpath {
 
@@ -55,6 +58,88 @@ bool contains(const Bounds& box, const Bounds& inner, double eps) {
 }  // namespace
 
 namespace {
+
+// Boxes of grouping items in a loose multi-level grid: level L has cells of
+// size base * 2^L, and a box sits in the cell of its centre at the finest
+// level whose cells are at least as large as the box, so that it lies within
+// its cell grown by half a cell each way. A query returns the boxes of every
+// cell whose grown extent meets a region (a superset of the boxes meeting
+// it), in no particular order; entries are never removed (callers skip dead
+// items). Build work and queries are near linear where the scene is (the
+// grouping compared every pair of items before).
+class LooseGrid {
+ public:
+  LooseGrid(const Bounds& scene) : origin_(scene.lo) {
+    base_ = std::max(scene.diagonal(), 1e-30) / double(1 << kLevels);
+  }
+
+  void insert(int id, const Bounds& b) {
+    const Vec3 s = b.size();
+    const double extent = std::max({s.x, s.y, s.z, 0.0});
+    int level = 0;
+    while (level < kLevels && base_ * double(1 << level) < extent) ++level;
+    const double cell = base_ * double(1 << level);
+    const Vec3 c = b.center();
+    std::array<long long, 3> k{};
+    for (int i = 0; i < 3; ++i) k[i] = clamp_cell(std::floor((c[i] - origin_[i]) / cell), level);
+    levels_[level][key(k)].push_back(id);
+  }
+
+  // Calls f(id) for every box whose cell's grown extent meets `r`, after
+  // dropping from the visited cells every id `dead(id)` names (each is
+  // dropped once, so the grid does not fill with dead items).
+  template <typename Dead, typename F>
+  void query(const Bounds& r, const Dead& dead, const F& f) {
+    auto visit = [&](std::vector<int>& ids) {
+      ids.erase(std::remove_if(ids.begin(), ids.end(), dead), ids.end());
+      for (int id : ids) f(id);
+    };
+    for (int level = 0; level <= kLevels; ++level) {
+      auto& cells = levels_[level];
+      if (cells.empty()) continue;
+      const double cell = base_ * double(1 << level);
+      std::array<long long, 3> lo{}, hi{};
+      double count = 1;
+      for (int i = 0; i < 3; ++i) {
+        lo[i] = clamp_cell(std::floor((r.lo[i] - origin_[i]) / cell - 1.5), level);
+        hi[i] = clamp_cell(std::floor((r.hi[i] - origin_[i]) / cell + 0.5), level);
+        count *= double(hi[i] - lo[i] + 1);
+      }
+      if (count > double(cells.size())) {  // fewer occupied cells than cells in range: visit those
+        for (auto& [k, ids] : cells) {
+          const std::array<long long, 3> c = unkey(k);
+          if (c[0] >= lo[0] && c[0] <= hi[0] && c[1] >= lo[1] && c[1] <= hi[1] && c[2] >= lo[2] && c[2] <= hi[2])
+            visit(ids);
+        }
+        continue;
+      }
+      for (long long x = lo[0]; x <= hi[0]; ++x)
+        for (long long y = lo[1]; y <= hi[1]; ++y)
+          for (long long z = lo[2]; z <= hi[2]; ++z)
+            if (const auto it = cells.find(key({x, y, z})); it != cells.end()) visit(it->second);
+    }
+  }
+
+ private:
+  static constexpr int kLevels = 20;  // the finest cells: a millionth of the scene's diagonal
+  static long long clamp_cell(double c, int level) {
+    const double most = double((1LL << (kLevels - level)) + 2);
+    return static_cast<long long>(std::clamp(c, -2.0, most));
+  }
+  static uint64_t key(const std::array<long long, 3>& k) {
+    uint64_t out = 0;
+    for (long long v : k) out = (out << 21) | static_cast<uint64_t>(v + 4);
+    return out;
+  }
+  static std::array<long long, 3> unkey(uint64_t k) {
+    std::array<long long, 3> out{};
+    for (int i = 2; i >= 0; --i, k >>= 21) out[i] = static_cast<long long>(k & ((1u << 21) - 1)) - 4;
+    return out;
+  }
+  Vec3 origin_;
+  double base_ = 1;
+  std::array<std::unordered_map<uint64_t, std::vector<int>>, kLevels + 1> levels_;
+};
 
 // A grouping item: an object or a group (a future box).
 struct Item {
@@ -110,6 +195,8 @@ class Builder {
       }
       items_.push_back(std::move(item));
     }
+    plain_ = std::make_unique<LooseGrid>(mesh.bounds);
+    reach_ = std::make_unique<LooseGrid>(mesh.bounds);
   }
 
   // Patches joined by shared corners (positions equal to 1e-6 of the scene's
@@ -155,17 +242,31 @@ class Builder {
   }
 
   // Greedy bottom-up grouping: the pair with the largest quotient above the
-  // threshold first; each new group is an item at once.
-  void group() {
-    // Every pair once, on every thread; the queue orders candidates totally
-    // (quotient, then indices), so the grouping does not depend on threads.
+  // threshold first; each new group is an item at once. `all_pairs`: every
+  // pair is compared (quadratic; the reference the tests hold the grid to).
+  void group(bool all_pairs) {
+    all_pairs_ = all_pairs;
     const int n = static_cast<int>(items_.size());
+    for (int i = 0; i < n; ++i) index_item(i);
+    // Every pair once, on every thread; the queue orders candidates totally
+    // (quotient, then indices), so the grouping does not depend on threads
+    // (nor on the order in which the grid finds them).
     tbb::enumerable_thread_specific<std::vector<Candidate>> found;
     tbb::parallel_for(0, n, [&](int a) {
       auto& local = found.local();
       Candidate c;
-      for (int b = a + 1; b < n; ++b)
-        if (candidate(a, b, c)) local.push_back(c);
+      if (all_pairs_) {
+        for (int b = a + 1; b < n; ++b)
+          if (candidate(a, b, c)) local.push_back(c);
+        return;
+      }
+      // Each pair from the side of its larger item, whose reach holds the smaller.
+      if (!(items_[a].area > 0)) return;
+      plain_->query(reach(a), [](int) { return false; }, [&](int b) {
+        if (b >= n || b == a) return;
+        if (items_[b].area > items_[a].area || (items_[b].area == items_[a].area && b < a)) return;
+        if (candidate(std::min(a, b), std::max(a, b), c)) local.push_back(c);
+      });
     });
     std::vector<Candidate> all;
     for (auto& local : found) all.insert(all.end(), local.begin(), local.end());
@@ -223,9 +324,96 @@ class Builder {
     return out.q > options_.group_threshold;
   }
 
-  void push_pair(int a, int b) {
+  // Where an item b no larger than `a` must lie for the pair to pass: the
+  // merged box's area is below 2 A_a / threshold (and the max_share bound),
+  // and a box holding a's box with that area extends along axis i at most
+  // (area / 2 - a_j a_k) / (a_j + a_k).
+  Bounds reach(int a) const {
+    const Bounds& x = items_[a].bounds;
+    const Vec3 e = x.size();
+    const double most = std::min(2.0 * items_[a].area / options_.group_threshold, options_.max_share * scene_area_);
+    Bounds r = x;
+    for (int i = 0; i < 3; ++i) {
+      const double ej = e[(i + 1) % 3], ek = e[(i + 2) % 3];
+      const double along = ej + ek > 0 ? (0.5 * most - ej * ek) / (ej + ek) : 0.0;
+      const double grow = std::max(0.0, along - e[i]) * (1 + 1e-9) + eps_;
+      r.lo[i] -= grow;
+      r.hi[i] += grow;
+    }
+    return r;
+  }
+
+  // The parts of `after` outside `before` (which it holds), as up to six slabs.
+  static std::vector<Bounds> slabs(const Bounds& before, const Bounds& after) {
+    std::vector<Bounds> out;
+    Bounds core = before;
+    for (int i = 0; i < 3; ++i) {
+      if (after.lo[i] < core.lo[i]) {
+        Bounds s = core;
+        s.lo[i] = after.lo[i];
+        s.hi[i] = core.lo[i];
+        out.push_back(s);
+        core.lo[i] = after.lo[i];
+      }
+      if (after.hi[i] > core.hi[i]) {
+        Bounds s = core;
+        s.lo[i] = core.hi[i];
+        s.hi[i] = after.hi[i];
+        out.push_back(s);
+        core.hi[i] = after.hi[i];
+      }
+    }
+    return out;
+  }
+
+  // Puts item i into the grids: its box, and its reach (where its smaller partners are).
+  void index_item(int i) {
+    if (all_pairs_) return;
+    plain_->insert(i, items_[i].bounds);
+    if (items_[i].area > 0) reach_->insert(i, reach(i));
+  }
+
+  // Candidates of the new item `id` with every living item before it.
+  void push_pairs(int id) {
     Candidate c;
-    if (candidate(a, b, c)) queue_.push(c);
+    if (all_pairs_) {
+      for (int i = 0; i < id; ++i)
+        if (items_[i].alive && candidate(i, id, c)) queue_.push(c);
+      return;
+    }
+    seen_.resize(items_.size(), 0);
+    auto take = [&](int i) {
+      if (i >= id || seen_[i]) return;
+      seen_[i] = 1;
+      touched_.push_back(i);
+      if (candidate(i, id, c)) queue_.push(c);
+    };
+    plain_->query(reach(id), dead_, take);            // the smaller ones
+    reach_->query(items_[id].bounds, dead_, take);  // the larger ones
+    forget_seen();
+  }
+
+  // Living items, not members and not yet `seen_`, whose boxes may meet one of
+  // `regions`; marked seen and added to `out`.
+  void near_regions(const std::vector<Bounds>& regions, std::vector<int>& out) {
+    auto take = [&](int i) {
+      if (!seen_[i] && !member_[i] && items_[i].alive) {
+        seen_[i] = 1;
+        touched_.push_back(i);
+        out.push_back(i);
+      }
+    };
+    if (all_pairs_) {
+      for (size_t i = 0; i < items_.size(); ++i) take(static_cast<int>(i));
+      return;
+    }
+    for (const Bounds& r : regions) plain_->query(r, dead_, take);
+  }
+
+  // Clears the seen marks.
+  void forget_seen() {
+    for (int i : touched_) seen_[i] = 0;
+    touched_.clear();
   }
 
   void collect_objects(int item, std::vector<int>& out) const {
@@ -261,30 +449,66 @@ class Builder {
 
   void try_group(const Candidate& c) {
     std::vector<int> members = {c.a, c.b};
-    member_.assign(items_.size(), 0);
+    member_.resize(items_.size(), 0);
+    seen_.resize(items_.size(), 0);
     member_[c.a] = member_[c.b] = 1;
+    const bool formed = form_group(c, members);
+    forget_seen();  // a refused group returns in the middle of a sweep
+    for (int m : members) member_[m] = 0;
+    if (!formed) return;
+    const int id = static_cast<int>(items_.size()) - 1;
+    member_.resize(items_.size(), 0);
+    index_item(id);
+    push_pairs(id);
+  }
+
+  // The group of candidate c (members so far in `members`): false when refused.
+  bool form_group(const Candidate& c, std::vector<int>& members) {
     Bounds box = merged(items_[c.a].bounds, items_[c.b].bounds);
     // Items reaching into the box join it (a cup on a table, a chair pushed
     // under it), the box growing to hold them, unless one is larger than the
     // box: then the box is refused (it would cut through a wall, a floor).
+    // Items are visited in index order, each against the box as it has grown
+    // so far, and again from the first while the box grows.
+    // pending: a min-heap of the items met so far in this sweep and not yet
+    // visited; when the box grows, the items in the slabs it grew by join it.
+    std::vector<int> pending, found;
     for (bool grew = true; grew;) {
       grew = false;
-      for (size_t i = 0; i < items_.size(); ++i) {
-        if (!items_[i].alive || member_[i]) continue;
-        if (!intrudes(static_cast<int>(i), box)) continue;
-        if (!contains(box, items_[i].bounds, eps_) && items_[i].area > box.surface_area()) return;
+      forget_seen();
+      pending.clear();
+      near_regions({box}, pending);
+      std::make_heap(pending.begin(), pending.end(), std::greater<int>());
+      while (!pending.empty()) {
+        std::pop_heap(pending.begin(), pending.end(), std::greater<int>());
+        const int i = pending.back();
+        pending.pop_back();
+        if (member_[i] || !intrudes(i, box)) continue;
+        if (!contains(box, items_[i].bounds, eps_) && items_[i].area > box.surface_area()) return false;
         member_[i] = 1;
-        members.push_back(static_cast<int>(i));
+        members.push_back(i);
+        const Bounds before = box;
         box = merged(box, items_[i].bounds);
-        if (box.surface_area() > options_.max_share * scene_area_) return;
+        if (box.surface_area() > options_.max_share * scene_area_) return false;
         grew = true;
+        // The larger box may meet items after this one that it did not meet before.
+        found.clear();
+        near_regions(slabs(before, box), found);
+        for (int j : found)
+          if (j > i) {
+            pending.push_back(j);
+            std::push_heap(pending.begin(), pending.end(), std::greater<int>());
+          } else {
+            seen_[j] = 0;  // before i: the next sweep's
+          }
       }
     }
+    forget_seen();
     for (int o : shell_)
-      if (object_meets(o, box)) return;
+      if (object_meets(o, box)) return false;
     const Vec3 size = box.size();
-    if (std::min({size.x, size.y, size.z}) < 1e3 * eps_) return;  // a flat box holds nothing inside
-    if (box.surface_area() > options_.max_share * scene_area_) return;
+    if (std::min({size.x, size.y, size.z}) < 1e3 * eps_) return false;  // a flat box holds nothing inside
+    if (box.surface_area() > options_.max_share * scene_area_) return false;
     Item group;
     group.bounds = box;
     group.area = box.surface_area();
@@ -299,10 +523,8 @@ class Builder {
         group.members.push_back(m);
       }
     }
-    const int id = static_cast<int>(items_.size());
     items_.push_back(std::move(group));
-    for (int i = 0; i < id; ++i)
-      if (items_[i].alive) push_pair(i, id);
+    return true;
   }
 
   size_t item_polygons(int item) const {
@@ -399,7 +621,12 @@ class Builder {
   std::vector<Item> items_;
   std::vector<int> shell_;  // objects of the scene's shell
   std::priority_queue<Candidate> queue_;
-  std::vector<uint8_t> member_;  // try_group's scratch: items in the box being formed
+  std::vector<uint8_t> member_;  // try_group's scratch: items in the box being formed (all 0 between calls)
+  std::vector<uint8_t> seen_;    // form_group's scratch: items met in the current sweep (all 0 between calls)
+  std::vector<int> touched_;     // the items seen_ marks
+  bool all_pairs_ = false;
+  std::unique_ptr<LooseGrid> plain_, reach_;  // item boxes; item reaches
+  std::function<bool(int)> dead_ = [this](int i) { return !items_[i].alive; };
   double eps_ = 0, scene_area_ = 0;
 };
 
@@ -422,11 +649,11 @@ size_t Hierarchy::ar_total() const {
 }
 
 
-Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat) {
+Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat, bool all_pairs) {
   HierarchyOptions o = options;
   if (flat) o.max_depth = 0;
   Builder builder(mesh, o);
-  if (o.max_depth > 0) builder.group();
+  if (o.max_depth > 0) builder.group(all_pairs);
   return builder.finish();
 }
 

@@ -41,8 +41,11 @@ struct Hierarchy {
 };
 
 // Builds the hierarchy of `mesh` (VP grids from vp_area_ratio or vp_grid); `flat` (or hierarchy.max_depth = 0): the
-// root alone. Deterministic for a given mesh and options.
-Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat);
+// root alone. Deterministic for a given mesh and options. Candidate pairs and
+// intruding items are found in a spatial grid of the items; `all_pairs`
+// compares every pair instead (quadratic: the reference the tests hold the
+// grid's result to, which must be the same hierarchy).
+Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat, bool all_pairs = false);
 
 // Turns the boxes transparent (hierarchy.transport = "lines"): each box's
 // patches become those of its subtree, ascending, and its walls lose their
