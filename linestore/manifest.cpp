@@ -21,7 +21,8 @@ void write_manifest(const fs::path& path, const Manifest& m) {
   json boxes = json::array();
   for (const BoxEntry& b : m.boxes)
     boxes.push_back({{"parent", b.parent}, {"depth", b.depth}, {"lo", b.lo}, {"hi", b.hi}, {"lines", b.lines},
-                     {"patches", b.patches}, {"ars", b.ars}, {"objects", b.objects}, {"quotient", b.quotient}});
+                     {"patches", b.patches}, {"ars", b.ars}, {"objects", b.objects}, {"quotient", b.quotient},
+                     {"direct_objects", b.direct_objects}});
   const json j = {{"format_version", m.format_version}, {"mpath_version", m.mpath_version},
                   {"identity", m.identity},             {"patches", m.patches},
                   {"faces", m.faces},                   {"lines_total", m.lines_total},
@@ -39,13 +40,13 @@ Manifest read_manifest(const fs::path& path) {
   json j;
   // Counts must be whole numbers in range: a float or a negative number in
   // their place is damage (and no cast is made of a value that does not fit).
-  const auto whole = [&](const json& v, const char* key, double most) {
-    const json& x = v.at(key);
+  const auto whole_value = [&](const json& x, const std::string& what, double most) {
     if (!x.is_number_integer() || (x.is_number_unsigned() ? double(x.get<uint64_t>()) > most : x.get<int64_t>() < -1 ||
                                                                                                     double(x.get<int64_t>()) > most))
-      throw json::type_error::create(302, fmt::format("'{}' is not a whole number in range", key), &x);
+      throw json::type_error::create(302, fmt::format("'{}' is not a whole number in range", what), &x);
     return x;
   };
+  const auto whole = [&](const json& v, const char* key, double most) { return whole_value(v.at(key), key, most); };
   const auto count = [&](const json& v, const char* key) {
     const json x = whole(v, key, 1.8e19);
     if (!x.is_number_unsigned()) throw json::type_error::create(302, fmt::format("'{}' is negative", key), &x);
@@ -78,6 +79,9 @@ Manifest read_manifest(const fs::path& path) {
       e.ars = count(b, "ars");
       e.objects = count(b, "objects");
       e.quotient = b.at("quotient").get<double>();
+      const json& direct = b.at("direct_objects");
+      if (!direct.is_array()) throw json::type_error::create(302, "'direct_objects' is not a list", &direct);
+      for (size_t k = 0; k < direct.size(); ++k) e.direct_objects.push_back(static_cast<int>(whole_value(direct[k], "direct_objects", 2e9).get<int64_t>()));
       m.boxes.push_back(e);
     }
     for (const json& f : j.at("files"))

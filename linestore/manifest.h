@@ -34,6 +34,7 @@ struct BoxEntry {
   uint64_t ars = 0;      // ARs of its walls
   uint64_t objects = 0;  // objects in it and its children
   double quotient = 0;
+  std::vector<int> direct_objects;  // the grouping's objects directly in it (the solver assembles the hierarchy from them)
 };
 
 struct Manifest {

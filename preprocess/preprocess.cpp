@@ -77,6 +77,7 @@ linestore::Manifest base_manifest(const Options& options, const PatchMesh& mesh,
     e.ars = box.ar_count();
     e.objects = static_cast<uint64_t>(box.objects_total);
     e.quotient = box.quotient;
+    e.direct_objects = box.objects;
     m.boxes.push_back(e);
   }
   return m;

@@ -193,7 +193,16 @@ void BoxStore::check_against(const Options& options, const PatchMesh& mesh, cons
   if (!mismatch.empty())
     throw InputError(fmt::format("{}: the store does not match this scene and config: {}; run mpath-preprocess again",
                                  manifest_path.string(), mismatch));
-  hierarchy_ = store_hierarchy(options, mesh);
+  // The store's boxes as its manifest records them (grouping again took
+  // minutes at a million polygons); the identity above makes them this
+  // scene's, and every box is checked against its record below.
+  std::vector<BoxLayout> layout;
+  for (const linestore::BoxEntry& e : manifest_.boxes) layout.push_back({e.parent, e.depth, e.quotient, e.direct_objects});
+  try {
+    hierarchy_ = store_hierarchy(options, mesh, &layout);
+  } catch (const InputError& e) {
+    throw InputError(fmt::format("{}: {} (damaged manifest); run mpath-preprocess again", manifest_path.string(), e.what()));
+  }
   const auto& recorded = manifest_.boxes;
   auto differs = [&](size_t b) {
     const SceneBox& box = hierarchy_.boxes[b];

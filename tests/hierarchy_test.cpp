@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "box_store.h"
+#include "error.h"
 #include "hierarchy.h"
 #include "line_tracing.h"
 #include "sampling.h"
@@ -145,6 +146,30 @@ TEST(Hierarchy, OneObjectForTheWholeSceneIsSplitIntoItsConnectedParts) {
   }
 }
 
+// A random room of boxes of every size (flat, thin, tiny, large, touching,
+// overlapping), the same for the same seed.
+Scene random_room(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  Scene scene;
+  const int m = test::add_material(scene, "grey", 0.5, 0);
+  test::add_box(scene, {0, 0, 0}, {6, 5, 3}, true, m, test::add_object(scene, "room"));
+  const int n = 20 + static_cast<int>(seed * 7 % 60);
+  for (int k = 0; k < n; ++k) {
+    // Sizes from a millimetre to a metre and a half, some flat or thin.
+    Vec3 size{0.001 + 1.5 * std::pow(u(rng), 3), 0.001 + 1.5 * std::pow(u(rng), 3), 0.001 + 1.5 * std::pow(u(rng), 3)};
+    if (k % 5 == 0) size.z = 0.0;
+    const Vec3 lo{u(rng) * (6 - size.x), u(rng) * (5 - size.y), k % 3 == 0 ? 0.0 : u(rng) * (3 - size.z)};
+    const int object = test::add_object(scene, "item" + std::to_string(k));
+    if (size.z == 0.0)
+      test::add_quad(scene, lo, lo + Vec3{size.x, 0, 0}, lo + Vec3{size.x, size.y, 0}, lo + Vec3{0, size.y, 0}, m,
+                     object);
+    else
+      test::add_box(scene, lo, lo + size, false, m, object);
+  }
+  return scene;
+}
+
 // The grouping finds candidate pairs and intruding items in a spatial grid;
 // the hierarchy must be the one that comparing every pair builds, on random
 // rooms of boxes of every size (flat, thin, tiny, large, touching,
@@ -159,24 +184,7 @@ TEST(Hierarchy, TheGridBuildsTheHierarchyThatComparingEveryPairBuilds) {
   };
   size_t subscenes = 0;
   for (unsigned seed = 1; seed <= 12; ++seed) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<double> u(0, 1);
-    Scene scene;
-    const int m = test::add_material(scene, "grey", 0.5, 0);
-    test::add_box(scene, {0, 0, 0}, {6, 5, 3}, true, m, test::add_object(scene, "room"));
-    const int n = 20 + static_cast<int>(seed * 7 % 60);
-    for (int k = 0; k < n; ++k) {
-      // Sizes from a millimetre to a metre and a half, some flat or thin.
-      Vec3 size{0.001 + 1.5 * std::pow(u(rng), 3), 0.001 + 1.5 * std::pow(u(rng), 3), 0.001 + 1.5 * std::pow(u(rng), 3)};
-      if (k % 5 == 0) size.z = 0.0;
-      const Vec3 lo{u(rng) * (6 - size.x), u(rng) * (5 - size.y), k % 3 == 0 ? 0.0 : u(rng) * (3 - size.z)};
-      const int object = test::add_object(scene, "item" + std::to_string(k));
-      if (size.z == 0.0)
-        test::add_quad(scene, lo, lo + Vec3{size.x, 0, 0}, lo + Vec3{size.x, size.y, 0}, lo + Vec3{0, size.y, 0}, m,
-                       object);
-      else
-        test::add_box(scene, lo, lo + size, false, m, object);
-    }
+    const Scene scene = random_room(seed);
     const PatchMesh mesh = build_mesh(scene, 0.05);
     for (const int depth : {1, 3}) {
       HierarchyOptions o;
@@ -223,6 +231,47 @@ TEST(Hierarchy, TheGridBuildsTheHierarchyThatComparingEveryPairBuilds) {
     std::vector<std::string> warnings;
     const PatchMesh mesh = build_mesh(load_scene(so, 16, warnings), 0.01);
     EXPECT_GT(same(mesh, HierarchyOptions{}, file), 1u) << file;
+  }
+}
+
+// A store records what grouping decided (hierarchy_layout) and the solver
+// assembles the hierarchy from it without grouping again: the same boxes on
+// random rooms; a layout that cannot be the mesh's is refused by name.
+TEST(Hierarchy, AssembledFromItsLayoutItIsTheSameAndADamagedLayoutIsRefused) {
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    const PatchMesh mesh = build_mesh(random_room(seed), 0.05);
+    HierarchyOptions o;
+    o.max_depth = 1 + seed % 3;
+    const Hierarchy h = build_hierarchy(mesh, o, false);
+    const std::vector<BoxLayout> layout = hierarchy_layout(h);
+    const Hierarchy again = assemble_hierarchy(mesh, o, layout);
+    EXPECT_EQ(describe_hierarchy(again, {}), describe_hierarchy(h, {})) << "seed " << seed;
+    EXPECT_EQ(again.patch_box, h.patch_box) << "seed " << seed;
+    EXPECT_EQ(again.depth_order, h.depth_order) << "seed " << seed;
+    if (layout.size() < 2) continue;
+    auto refused = [&](std::vector<BoxLayout> bad, const std::string& what) {
+      try {
+        assemble_hierarchy(mesh, o, bad);
+        ADD_FAILURE() << what << " was accepted";
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("does not fit this scene"), std::string::npos) << e.what();
+      }
+    };
+    std::vector<BoxLayout> bad = layout;
+    bad[1].objects.push_back(bad[0].objects.front());  // an object in two boxes
+    refused(bad, "a repeated object");
+    bad = layout;
+    bad[1].objects.clear();  // objects in no box
+    refused(bad, "missing objects");
+    bad = layout;
+    bad[1].objects.push_back(1 << 30);
+    refused(bad, "an object out of range");
+    bad = layout;
+    bad[1].parent = 1;
+    refused(bad, "a box its own parent");
+    bad = layout;
+    bad[1].depth = 5;
+    refused(bad, "a wrong depth");
   }
 }
 

@@ -47,8 +47,9 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
   };
 }
 
-Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh) {
-  Hierarchy h = build_hierarchy(mesh, options.hierarchy, options.solver.method != SolverMethod::hierarchical);
+Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh, const std::vector<BoxLayout>* layout) {
+  Hierarchy h = layout ? assemble_hierarchy(mesh, options.hierarchy, *layout)
+                       : build_hierarchy(mesh, options.hierarchy, options.solver.method != SolverMethod::hierarchical);
   if (h.boxes.size() > 1 && options.hierarchy.transport == "lines") make_boxes_transparent(h);
   else if (options.hierarchy.vp_grid <= 0) fit_vp_grids(h, options.lines);
   return h;

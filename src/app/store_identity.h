@@ -19,7 +19,9 @@ std::string mesh_hash(const PatchMesh& mesh);
 
 // The hierarchy a store is made with: subscenes for solver.method =
 // "hierarchical", the root box alone otherwise (docs/user-guide.md), with
-// its VP grids fitted to lines.total unless hierarchy.vp_grid is set.
-Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh);
+// its VP grids fitted to lines.total unless hierarchy.vp_grid is set. With
+// `layout` (a store's record of its boxes) the boxes are assembled from it
+// instead of grouping again (InputError when it cannot be this mesh's).
+Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh, const std::vector<BoxLayout>* layout = nullptr);
 
 }  // namespace mpath

@@ -2,6 +2,8 @@
 // (docs/algorithm.md, "Hierarchy of subscenes").
 #include "hierarchy.h"
 
+#include "error.h"
+
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -291,6 +293,43 @@ class Builder {
       if (items_[i].alive) top.push_back(static_cast<int>(i));
     place(h, 0, top, scene_area_);
     // Deeper than max_depth: dissolved into the ancestor at max_depth.
+    return complete(std::move(h));
+  }
+
+  // The hierarchy of a layout recorded by hierarchy_layout (a store's
+  // manifest), without grouping again; InputError when it cannot be this
+  // mesh's (boxes out of order, objects missing, repeated or out of range).
+  Hierarchy assemble(const std::vector<BoxLayout>& layout) {
+    auto bad = [](const std::string& what) { throw InputError("the store's hierarchy does not fit this scene: " + what); };
+    if (layout.empty() || layout[0].parent != -1 || layout[0].depth != 0) bad("no root box first");
+    Hierarchy h;
+    h.patch_box.assign(mesh_.patches.size(), 0);
+    std::vector<uint8_t> placed(object_patches_.size(), 0);
+    for (size_t b = 0; b < layout.size(); ++b) {
+      const BoxLayout& l = layout[b];
+      if (b > 0 && (l.parent < 0 || l.parent >= static_cast<int>(b) || l.depth != layout[l.parent].depth + 1))
+        bad(fmt::format("box {} has parent {} and depth {}", b, l.parent, l.depth));
+      SceneBox box;
+      box.parent = l.parent;
+      box.depth = l.depth;
+      box.quotient = l.quotient;
+      for (int o : l.objects) {
+        if (o < 0 || o >= static_cast<int>(placed.size()) || placed[o]) bad(fmt::format("object {} of box {}", o, b));
+        placed[o] = 1;
+        box.objects.push_back(o);
+      }
+      h.boxes.push_back(std::move(box));
+      if (b > 0) h.boxes[l.parent].children.push_back(static_cast<int>(b));
+    }
+    for (size_t o = 0; o < placed.size(); ++o)
+      if (!placed[o] && !object_patches_[o].empty()) bad(fmt::format("object {} is in no box", o));
+    h.boxes[0].bounds = mesh_.bounds;
+    return complete(std::move(h));
+  }
+
+ private:
+  // Patches, bounds, totals and VP grids of every box, and the depth order.
+  Hierarchy complete(Hierarchy h) {
     for (size_t b = 0; b < h.boxes.size(); ++b) finish_box(h, static_cast<int>(b));
     // Boxes listed by depth, then index (children run after their parents).
     h.depth_order.resize(h.boxes.size());
@@ -300,7 +339,6 @@ class Builder {
     return h;
   }
 
- private:
   struct Candidate {
     double q;
     int a, b;
@@ -648,6 +686,17 @@ size_t Hierarchy::ar_total() const {
   return n;
 }
 
+
+std::vector<BoxLayout> hierarchy_layout(const Hierarchy& h) {
+  std::vector<BoxLayout> out;
+  for (const SceneBox& b : h.boxes) out.push_back({b.parent, b.depth, b.quotient, b.objects});
+  return out;
+}
+
+Hierarchy assemble_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, const std::vector<BoxLayout>& layout) {
+  Builder builder(mesh, options);
+  return builder.assemble(layout);
+}
 
 Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat, bool all_pairs) {
   HierarchyOptions o = options;

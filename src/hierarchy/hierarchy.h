@@ -47,6 +47,19 @@ struct Hierarchy {
 // grid's result to, which must be the same hierarchy).
 Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat, bool all_pairs = false);
 
+// What grouping decided, per box: enough to assemble the hierarchy again
+// from the mesh without grouping (a store records it; docs/store-format.md).
+struct BoxLayout {
+  int parent = -1;
+  int depth = 0;
+  double quotient = 0;
+  std::vector<int> objects;  // the grouping's objects directly in the box (large objects split into their parts)
+};
+std::vector<BoxLayout> hierarchy_layout(const Hierarchy& h);
+// The hierarchy `layout` describes, as build_hierarchy made it; InputError
+// when the layout cannot be this mesh's.
+Hierarchy assemble_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, const std::vector<BoxLayout>& layout);
+
 // Turns the boxes transparent (hierarchy.transport = "lines"): each box's
 // patches become those of its subtree, ascending, and its walls lose their
 // VPs and ARs.
