@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
 """Driver of scripts/bench-furnace."""
-import csv
 import json
 import os
 import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
+from bench_common import write_csv  # noqa: E402
 from solution import read_solution  # noqa: E402
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
@@ -42,11 +42,7 @@ def main(work, seeds):
                     r = rows[-1]
                     print(f"rho {rho} lines {lines} {sequence}/{mode} seed {seed}: mean|err| {r['mean_abs_error']:.4f} "
                           f"({r['seconds']:.1f} s)", flush=True)
-    os.makedirs(os.path.join(ROOT, "docs/benchmarks"), exist_ok=True)
-    with open(os.path.join(ROOT, "docs/benchmarks/furnace.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv("furnace", rows)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -11,7 +11,6 @@ usage: bench_line_sets.py WORK [--seeds 1,2,3] [--rhos 0.5,0.9,0.99]
                           [--lines 2000000] [--reps 3] [--threads 2]
 """
 import argparse
-import csv
 import json
 import math
 import os
@@ -19,6 +18,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_common import write_csv  # noqa: E402
 from solution import read_solution  # noqa: E402
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
@@ -83,11 +83,7 @@ def main():
                 r = rows[-1]
                 print(f"rho {rho} seed {seed} {method:12s}: error {100 * r['error']:.3f} %, {r['iterations']} "
                       f"iterations, {wall:.2f} s wall, {cpu:.2f} CPU s", flush=True)
-    os.makedirs(os.path.join(ROOT, "docs/benchmarks"), exist_ok=True)
-    with open(os.path.join(ROOT, "docs/benchmarks/line_sets.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv("line_sets", rows)
     plot(rows)
 
 

@@ -7,6 +7,9 @@ import re
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_common import write_csv  # noqa: E402
+
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 
 
@@ -39,11 +42,7 @@ def main(work, sizes):
                "solver_peak_rss_bytes": report["memory"]["peak_rss_bytes"], "commit": report["mpath"]["commit"]}
         rows.append(row)
         print(json.dumps(row), flush=True)
-    os.makedirs(os.path.join(ROOT, "docs/benchmarks"), exist_ok=True)
-    with open(os.path.join(ROOT, "docs/benchmarks/store.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    write_csv("store", rows)
     plot(rows)
 
 

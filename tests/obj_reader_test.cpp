@@ -121,17 +121,22 @@ TEST(SceneLoader, AppliesConfigEmittersAndTwoSidedMaterialsByName) {
   }
 }
 
-// A polygon given twice (either way round) is a warning with the count.
-TEST(SceneLoader, WarnsOfDuplicatedPolygons) {
+// The warnings load_scene gives for an OBJ scene whose material "light" emits.
+std::vector<std::string> loader_warnings(const std::string& obj) {
   TempDir dir;
   write_file(dir / "d.mtl", "newmtl light\nKd 0.5 0.5 0.5\n");
-  write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
-                            "f 1 2 3 4\nf 4 3 2 1\nf 2 3 4 1\nf 1 2 5\n");
+  write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\n" + obj);
   SceneOptions o;
   o.file = dir / "d.obj";
   o.emitters["light"] = {1, 1, 1};
   std::vector<std::string> w;
   load_scene(o, 16, w);
+  return w;
+}
+
+// A polygon given twice (either way round) is a warning with the count.
+TEST(SceneLoader, WarnsOfDuplicatedPolygons) {
+  const auto w = loader_warnings("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3 4\nf 4 3 2 1\nf 2 3 4 1\nf 1 2 5\n");
   ASSERT_EQ(w.size(), 1u);
   EXPECT_EQ(w[0].find("2 polygon(s) have the same vertices as another"), 0u) << w[0];
 }
@@ -193,15 +198,8 @@ TEST(SceneLoader, FindsCoplanarOverlapsAndNothingElse) {
 
 // load_scene names the first overlapping pair in its warning.
 TEST(SceneLoader, WarnsOfCoplanarOverlaps) {
-  TempDir dir;
-  write_file(dir / "d.mtl", "newmtl light\nKd 0.5 0.5 0.5\n");
-  write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\no wall\nv 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\n"
-                            "f 1 2 3 4\no poster\nv 0.5 0.5 0\nv 1 0.5 0\nv 1 1 0\nv 0.5 1 0\nf 5 6 7 8\n");
-  SceneOptions o;
-  o.file = dir / "d.obj";
-  o.emitters["light"] = {1, 1, 1};
-  std::vector<std::string> w;
-  load_scene(o, 16, w);
+  const auto w = loader_warnings("o wall\nv 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nf 1 2 3 4\n"
+                                 "o poster\nv 0.5 0.5 0\nv 1 0.5 0\nv 1 1 0\nv 0.5 1 0\nf 5 6 7 8\n");
   ASSERT_EQ(w.size(), 1u);
   EXPECT_NE(w[0].find("2 polygon(s) overlap a coplanar polygon facing the same way (first: polygon 1 of object "
                       "'wall' and polygon 2 of object 'poster')"), std::string::npos) << w[0];
