@@ -613,6 +613,25 @@ TEST(HierarchicalPrograms, ShardedStoreEqualsOneMadeAtOnce) {
   EXPECT_NE(r.output.find("box0001.part0001of0002.lines"), std::string::npos) << r.output;
 }
 
+// mpath-solve assembles the hierarchy from the manifest's record of each
+// box's objects: a record that cannot be the scene's is an error naming the
+// manifest (exit 1), not another hierarchy.
+TEST(HierarchicalPrograms, AManifestWhoseBoxesCannotBeTheScenesIsRefused) {
+  TempDir dir;
+  const std::string store = " store.dir=" + (dir / "store").string();
+  ASSERT_EQ(preprocess_room(store).exit_code, 0);
+  const auto manifest = dir / "store/manifest.json";
+  nlohmann::json j = nlohmann::json::parse(test::read_file(manifest));
+  ASSERT_GE(j["boxes"].size(), 2u);
+  j["boxes"][1]["direct_objects"].push_back(j["boxes"][0]["direct_objects"][0]);  // an object in two boxes
+  test::write_file(manifest, j.dump(2));
+  const test::RunResult r = solve_room(store + " output.dir=" + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("manifest.json: the store's hierarchy does not fit this scene: object"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/solution.ply"));
+}
+
 TEST(HierarchicalPrograms, ResumeGivesTheUninterruptedResult) {
   for (const std::string transport : {"transmittance", "lines"}) {
     TempDir dir;
