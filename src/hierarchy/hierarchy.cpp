@@ -17,6 +17,7 @@
 #include <queue>
 #include <set>
 #include <unordered_map>
+#include <utility>
 
 namespace mpath {
 
@@ -92,12 +93,28 @@ class LooseGrid {
   // dropped once, so the grid does not fill with dead items).
   template <typename Dead, typename F>
   void query(const Bounds& r, const Dead& dead, const F& f) {
-    auto visit = [&](std::vector<int>& ids) {
+    visit_cells(levels_, r, [&](std::vector<int>& ids) {
       ids.erase(std::remove_if(ids.begin(), ids.end(), dead), ids.end());
       for (int id : ids) f(id);
-    };
+    });
+  }
+  // The same, dropping nothing (threads may query at once).
+  template <typename F>
+  void query(const Bounds& r, const F& f) const {
+    visit_cells(levels_, r, [&](const std::vector<int>& ids) {
+      for (int id : ids) f(id);
+    });
+  }
+
+ private:
+  static constexpr int kLevels = 20;  // the finest cells: a millionth of the scene's diagonal
+  using Levels = std::array<std::unordered_map<uint64_t, std::vector<int>>, kLevels + 1>;
+
+  // visit(ids) for the cells of `levels` (const or not) whose grown extent meets `r`.
+  template <typename L, typename V>
+  void visit_cells(L& levels, const Bounds& r, const V& visit) const {
     for (int level = 0; level <= kLevels; ++level) {
-      auto& cells = levels_[level];
+      auto& cells = levels[level];
       if (cells.empty()) continue;
       const double cell = base_ * double(1 << level);
       std::array<long long, 3> lo{}, hi{};
@@ -122,8 +139,6 @@ class LooseGrid {
     }
   }
 
- private:
-  static constexpr int kLevels = 20;  // the finest cells: a millionth of the scene's diagonal
   static long long clamp_cell(double c, int level) {
     const double most = double((1LL << (kLevels - level)) + 2);
     return static_cast<long long>(std::clamp(c, -2.0, most));
@@ -140,7 +155,7 @@ class LooseGrid {
   }
   Vec3 origin_;
   double base_ = 1;
-  std::array<std::unordered_map<uint64_t, std::vector<int>>, kLevels + 1> levels_;
+  Levels levels_;
 };
 
 // A grouping item: an object or a group (a future box).
@@ -264,7 +279,7 @@ class Builder {
       }
       // Each pair from the side of its larger item, whose reach holds the smaller.
       if (!(items_[a].area > 0)) return;
-      plain_->query(reach(a), [](int) { return false; }, [&](int b) {
+      std::as_const(*plain_).query(reach(a), [&](int b) {
         if (b >= n || b == a) return;
         if (items_[b].area > items_[a].area || (items_[b].area == items_[a].area && b < a)) return;
         if (candidate(std::min(a, b), std::max(a, b), c)) local.push_back(c);
