@@ -53,23 +53,17 @@ void ChunkTracer::count_classes(const std::vector<linestore::Event>& events, lin
   // leaving it carries no pair. Counted on the side of patch i that faces
   // crossing i + dir, as the solver's face_towards picks it.
   const int n = static_cast<int>(events.size());
-  const bool root = box_index_ == 0;
-  for (int i = 0; i < n; ++i) {
-    const int a = owner_[events[i].id];
+  const auto depth = [&](int x) { return hierarchy_.boxes[x].depth; };
+  const auto common = [&](int x, int y) { return hierarchy_.common_box(x, y); };
+  for (int i = 0; i < n; ++i)
     for (const int dir : {+1, -1}) {
       const int j = i + dir;
-      int k;
-      if (j < 0 || j >= n) {
-        if (!root) continue;
-        k = hierarchy_.boxes[a].depth;
-      } else {
-        k = hierarchy_.boxes[a].depth -
-            hierarchy_.boxes[hierarchy_.common_box(a, owner_[events[j].id])].depth;
-      }
+      const int k = pair_class(owner_[events[i].id], j < 0 || j >= n ? -1 : owner_[events[j].id], box_index_ == 0,
+                               depth, common);
+      if (k < 0) continue;
       const int side = (dir > 0) == events[i].along ? 0 : 1;
-      counts.class_crossings[(size_t{events[i].id} * 2 + side) * class_span_ + k]++;
+      counts.class_crossings[(size_t{events[i].id} * 2 + side) * class_span_ + static_cast<size_t>(k)]++;
     }
-  }
 }
 
 void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const {

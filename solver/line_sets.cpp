@@ -19,9 +19,9 @@ namespace {
 // it (j off the line of a subscene: the pair's other end is outside the box).
 inline int pair_class(const LineSets& sets, const LineSetBox& lines, bool root, const Event* ev, int n, int i,
                       int j) {
-  const int a = lines.owner[ev[i].id];
-  if (j < 0 || j >= n) return root ? sets.depth[a] : -1;  // the outside is the root's
-  return sets.depth[a] - sets.depth[sets.common_box(a, lines.owner[ev[j].id])];
+  return mpath::pair_class(
+      lines.owner[ev[i].id], j < 0 || j >= n ? -1 : lines.owner[ev[j].id], root, [&](int x) { return sets.depth[x]; },
+      [&](int x, int y) { return sets.common_box(x, y); });
 }
 
 

@@ -23,6 +23,17 @@ int common_ancestor(int a, int b, const Depth& depth, const Parent& parent) {
   return a;
 }
 
+// The class of a pair of consecutive crossings on a line (line sets): the
+// patch of box a against the patch of box b, as the levels from a's box up to
+// the smallest box holding both (0: a's own box). b < 0: the other end is off
+// the line, the outside, which is the root's class for the root's lines and
+// no class of a subscene's (-1: its line leaving the box carries no pair).
+template <typename Depth, typename Common>
+int pair_class(int a, int b, bool root_line, const Depth& depth, const Common& common) {
+  if (b < 0) return root_line ? depth(a) : -1;
+  return depth(a) - depth(common(a, b));
+}
+
 struct Hierarchy {
   std::vector<SceneBox> boxes;       // 0 is the root; parents before children
   std::vector<int> patch_box;        // patch -> box holding it directly
