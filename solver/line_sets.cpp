@@ -394,7 +394,8 @@ void plan_iteration(const BoxStore& store, const LineSets& sets, const Radiosity
   double power = 0;
   for (double p : state.pooled) power += p;
   // The root's lines carry every class too, so a subscene needs no floor of
-  // its own: every box takes at least the root's share of its lines.
+  // its own: the root takes at least its coverage, and a subscene whose share
+  // falls below that takes no line (the root's lines carry its classes).
   const double coverage = store.box(0).coverage;
   for (size_t x = 0; x < boxes; ++x) {
     const StoreBox& box = store.box(static_cast<int>(x));

@@ -53,7 +53,9 @@ LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh);
 // first carrier is its own box); then the uncarried faces' power shot with
 // local lines. Every line of every box when `power_per_line` is 0;
 // otherwise each box takes as many as carry about that power each (the power
-// left over the store's lines, at least the box's coverage), a crossing's
+// left over the store's lines; the root at least its coverage, a subscene
+// none below the root's coverage, its classes then carried by the root's
+// lines alone), a crossing's
 // share of its class scaled so that the carriers' expected shares add up to
 // one, none sending more than its expected part.
 PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, const LineSets& sets,
