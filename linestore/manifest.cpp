@@ -29,7 +29,7 @@ void write_manifest(const fs::path& path, const Manifest& m) {
                   {"chunk_lines", m.chunk_lines},       {"boxes", boxes},
                   {"files", files}};
   AtomicFile file(path, partial_path(path));
-  file.stream() << j.dump(2) << "\n";
+  file.stream() << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
   file.commit();
 }
 
@@ -90,7 +90,10 @@ Manifest read_manifest(const fs::path& path) {
                          count(f, "bytes"), f.at("hash").get<std::string>()});
     return m;
   } catch (const json::exception& e) {
-    throw InputError(fmt::format("{}: malformed manifest: {}", path.string(), e.what()));
+    // nlohmann's messages start "[json.exception.KIND.ID] ": the rest says what is wrong.
+    std::string what = e.what();
+    if (what.rfind("[json.exception.", 0) == 0 && what.find("] ") != std::string::npos) what = what.substr(what.find("] ") + 2);
+    throw InputError(fmt::format("{}: malformed manifest: {}", path.string(), what));
   }
 }
 

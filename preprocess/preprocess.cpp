@@ -17,6 +17,7 @@
 #include "hierarchy.h"
 #include "line_budget.h"
 #include "line_tracing.h"
+#include "directory_lock.h"
 #include "manifest.h"
 #include "mpath_version.h"
 #include "prepared_scene.h"
@@ -225,7 +226,18 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   if (dry_run) return stats;
 
   const fs::path dir = options.store.dir;
-  fs::create_directories(dir);
+  create_folder(dir, "store.dir");
+  // One run writes the store at a time; shards of one store run together,
+  // each part once.
+  const char* busy = "another mpath-preprocess is writing it, or mpath-solve is reading it; wait for that run, or "
+                     "give this one another store.dir";
+  const DirectoryLock store_lock(dir, kLockFile, shard.count == 1 ? DirectoryLock::Role::writer : DirectoryLock::Role::shard,
+                                 "store.dir", busy);
+  std::optional<DirectoryLock> shard_lock;
+  if (shard.count > 1)
+    shard_lock.emplace(dir, fmt::format("{}.part{:04}of{:04}", kLockFile, shard.index, shard.count),
+                       DirectoryLock::Role::writer, fmt::format("shard {}/{} of store.dir", shard.index, shard.count),
+                       "that shard is being traced by another mpath-preprocess; run each shard once");
   const auto identity = store_identity(options, mesh);
   const linestore::Manifest base = base_manifest(options, mesh, hierarchy, budget, identity);
   const fs::path record = shard.count == 1 ? dir / "manifest.json" : part_manifest(dir, shard);
@@ -260,7 +272,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
                                  {"peak_rss_bytes", peak_rss_bytes()}, {"boxes", per_box}};
   write_text_file(dir / (shard.count == 1 ? std::string("preprocess.json")
                                           : fmt::format("preprocess.part{:04}of{:04}.json", shard.index, shard.count)),
-                  timings.dump(2) + "\n");
+                  timings.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   spdlog::info("{}: {} box file(s), {} lines, {} events, {:.3f} bytes/event on disk ({:.2f} before compression), {:.1f} MB",
                dir.string(), m.files.size(), stats.lines, stats.events,
                stats.events ? double(stats.bytes) / stats.events : 0.0,

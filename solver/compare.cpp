@@ -1,4 +1,5 @@
 #include "compare.h"
+#include "directory_lock.h"
 
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
@@ -119,7 +120,7 @@ void run_compare(const Options& options, const CompareFlags& flags) {
                "median {:.4g}, 90 % {:.4g}, 99 % {:.4g}",
                result_path.string(), reference_path.string(), c.faces, c.mse, c.rel_rms, c.mean_relative, c.p50, c.p90,
                c.p99);
-  std::filesystem::create_directories(flags.out);
+  create_folder(flags.out, "--out");
   nlohmann::json images = nlohmann::json::array();
   if (flags.images && !options.cameras.empty()) {
     const PreparedScene prepared = prepare_scene(options);
@@ -185,7 +186,7 @@ void run_compare(const Options& options, const CompareFlags& flags) {
       {"relative_error", {{"mean", c.mean_relative}, {"p50", c.p50}, {"p90", c.p90}, {"p99", c.p99}}},
       {"images", images},
       {"colour_map", {{"scale", flags.scale}, {"colours", map}}}};
-  write_text_file(flags.out / "compare.json", out.dump(2) + "\n");
+  write_text_file(flags.out / "compare.json", out.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
 }  // namespace mpath

@@ -4,9 +4,11 @@
 #include <tbb/global_control.h>
 
 #include <chrono>
+#include <optional>
 
 #include "atomic_file.h"
 #include "checkpoint.h"
+#include "directory_lock.h"
 #include "classic.h"
 #include "error.h"
 #include "first_shot.h"
@@ -200,12 +202,21 @@ void run_solve(const Options& options, const SolveFlags& flags) {
 
   const PreparedScene prepared = prepare_scene(options);
   const PatchMesh& mesh = prepared.mesh;
+  // A store being rewritten by mpath-preprocess is not read (the lock is
+  // shared: runs that only read it go on together).
+  std::optional<DirectoryLock> store_lock;
+  if (options.solver.method != SolverMethod::classic && std::filesystem::is_directory(options.store.dir))
+    store_lock.emplace(options.store.dir, kLockFile, DirectoryLock::Role::reader, "store.dir",
+                       "mpath-preprocess is writing this store; solve when it has finished");
   const std::unique_ptr<BoxStore> store = open_store(options, mesh, record.timings);
   if (flags.dry_run) {
     spdlog::info("dry run: config, scene{} are valid; nothing solved", store ? " and store" : "");
     return;
   }
-  std::filesystem::create_directories(options.output.dir);
+  create_folder(options.output.dir, "output.dir");
+  const DirectoryLock output_lock(options.output.dir, kLockFile, DirectoryLock::Role::writer, "output.dir",
+                                  "two solves would overwrite each other's results and checkpoint; give this run "
+                                  "another output.dir, or wait");
 
   const auto bvh_start = clock::now();
   const Tracer tracer(mesh);
@@ -228,7 +239,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
 
   record.timings.total = seconds_since(start);
   const nlohmann::json report = solve_report(options, prepared, state, store.get(), record);
-  write_text_file(options.output.dir / "report.json", report.dump(2) + "\n");
+  write_text_file(options.output.dir / "report.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   spdlog::info("results in {} ({:.2f} s in all)", options.output.dir.string(), seconds_since(start));
 }
 

@@ -10,6 +10,7 @@
 #include "line_tracing.h"
 #include "scene_readers.h"
 #include "box_store.h"
+#include "directory_lock.h"
 #include "hash.h"
 #include "hierarchical.h"
 #include "test_util.h"
@@ -231,6 +232,50 @@ TEST(Store, TemporariesOfKilledRunsAreRemovedByTheNextRun) {
   EXPECT_FALSE(std::filesystem::exists(stale));
   EXPECT_TRUE(std::filesystem::exists(live));
   EXPECT_TRUE(std::filesystem::exists(dir / "out/report.json"));
+}
+
+// Runs that would mix their files are refused by name: the test holds the
+// lock a run of each kind holds, and runs the real programs against it.
+TEST(Store, RunsThatWouldMixTheirFilesAreRefusedByName) {
+  TempDir dir;
+  const std::filesystem::path store = dir / "store";
+  const std::string at = "store.dir=" + store.string() + " output.dir=" + (dir / "out").string();
+  ASSERT_EQ(preprocess(at).exit_code, 0);
+  const std::string pid = "(process " + std::to_string(getpid()) + ")";
+  auto refused = [&](const RunResult& r, const std::string& what) {
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(what + " is in use by another mpath run " + pid), std::string::npos) << r.output;
+  };
+  using Role = DirectoryLock::Role;
+  {  // mpath-solve reading the store
+    const DirectoryLock solving(store, kLockFile, Role::reader, "store.dir", "");
+    refused(preprocess(at + " lines.seed=2"), "store.dir " + store.string());
+    refused(preprocess(at + " lines.seed=2 --shard 1/2"), "store.dir " + store.string());
+    const RunResult other_reader = solve(at);  // solves share a store
+    EXPECT_EQ(other_reader.exit_code, 0) << other_reader.output;
+  }
+  {  // mpath-preprocess writing it
+    const DirectoryLock writing(store, kLockFile, Role::writer, "store.dir", "");
+    refused(solve(at + " output.dir=" + (dir / "out2").string()), "store.dir " + store.string());
+    EXPECT_FALSE(std::filesystem::exists(dir / "out2/report.json"));
+  }
+  {  // shard 1 of 2 being traced: shard 2 runs beside it, shard 1 again does not
+    const DirectoryLock shards(store, kLockFile, Role::shard, "store.dir", "");
+    const DirectoryLock first(store, std::string(kLockFile) + ".part0001of0002", Role::writer, "", "");
+    refused(preprocess(at + " --shard 1/2"), "shard 1/2 of store.dir " + store.string());
+    const RunResult second = preprocess(at + " --shard 2/2");
+    EXPECT_EQ(second.exit_code, 0) << second.output;
+    refused(preprocess(at), "store.dir " + store.string());
+    refused(solve(at), "store.dir " + store.string());
+  }
+  {  // mpath-solve writing the outputs
+    const DirectoryLock writing(dir / "out", kLockFile, Role::writer, "output.dir", "");
+    refused(solve(at + " solver.method=classic"), "output.dir " + (dir / "out").string());
+  }
+  // The locks went with their holders: shard 1 completes the store.
+  ASSERT_EQ(preprocess(at + " --shard 1/2").exit_code, 0);
+  const RunResult again = solve(at);
+  EXPECT_EQ(again.exit_code, 0) << again.output;
 }
 
 // Faces no stored line crosses (a millimetre cube in a kilometre room at

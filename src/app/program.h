@@ -61,7 +61,7 @@ inline int parse_command_line(CLI::App& app, int argc, char** argv) {
   } catch (const CLI::Success&) {
     return 0;
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "%s: error: %s (see %s --help)\n", app.get_name().c_str(), e.what(), app.get_name().c_str());
+    std::fprintf(stderr, "%s: error: %s (see %s --help)\n", app.get_name().c_str(), printable(e.what()).c_str(), app.get_name().c_str());
     return 1;
   }
   return -1;
@@ -86,15 +86,15 @@ int run_program(const char* name, const char* advice, const ProgramFlags& f, Bod
     if (!f.quiet) std::cerr << "# effective config\n" << options_to_toml(options);
     body(options);
   } catch (const InputError& e) {
-    std::fprintf(stderr, "%s: error: %s\n", name, e.what());
+    std::fprintf(stderr, "%s: error: %s\n", name, printable(e.what()).c_str());
     return 1;
   } catch (const std::filesystem::filesystem_error& e) {
     // A folder that cannot be made or a file that cannot be written: the
     // user's paths or disk, not mpath's state.
-    std::fprintf(stderr, "%s: error: %s: %s\n", name, e.path1().string().c_str(), e.code().message().c_str());
+    std::fprintf(stderr, "%s: error: %s: %s\n", name, printable(e.path1().string()).c_str(), e.code().message().c_str());
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: error: %s\n", name, e.what());
+    std::fprintf(stderr, "%s: error: %s\n", name, printable(e.what()).c_str());
     return 2;
   }
   return 0;

@@ -84,6 +84,11 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
   else if (ext == ".ply") scene = read_ply(path);
   else if (ext == ".mgf") scene = read_mgf(path, curve_segments, options.mgf_default_sides, &warnings);
   else throw InputError(fmt::format("{}: unknown scene format '{}' (expected .obj, .ply or .mgf)", path.string(), ext));
+  // Names and warnings go to logs, report.json and the store's manifest:
+  // bytes of a damaged or foreign file that are not UTF-8 become \xNN.
+  for (auto& o : scene.objects) o.name = printable(o.name);
+  for (auto& m : scene.materials) m.name = printable(m.name);
+  for (auto& w : warnings) w = printable(w);
 
   for (const auto& [name, radiance] : options.emitters)
     for (int m : require_materials(scene, "scene.emitters." + name, name)) scene.materials[m].emission = radiance;

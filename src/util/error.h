@@ -21,6 +21,10 @@ inline InputError file_error(const std::string& path, long line, const std::stri
   return InputError(fmt::format("{}: {}", path, message));
 }
 
+// `text` fit for a terminal and a log: bytes that are not printable UTF-8
+// (a damaged file quoted in a message) become \xNN.
+std::string printable(const std::string& text);
+
 [[noreturn]] void check_failed(const char* expr, const char* file, int line, const std::string& msg);
 
 }  // namespace mpath
