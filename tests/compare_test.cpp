@@ -1,6 +1,9 @@
 // mpath-compare: the error measures against values worked by hand, the
 // solution reader's refusals, and the program on the shipped room.
 #include <gtest/gtest.h>
+
+#include <array>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -54,10 +57,23 @@ TEST(Compare, DarkReferenceFacesHaveNoRelativeError) {
   EXPECT_GT(c.mse, 0.3);  // still counted in the MSE
 }
 
+// compare_solutions throws an InputError whose message holds `says`.
+void expect_refused(const SolutionFaces& result, const SolutionFaces& reference, const std::string& says) {
+  try {
+    compare_solutions(result, reference);
+    ADD_FAILURE() << "compared";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+  }
+}
+
 TEST(Compare, RefusesSolutionsOfDifferentMeshes) {
-  EXPECT_THROW(compare_solutions(faces({1, 1}, {{{1, 1, 1}}, {{1, 1, 1}}}), faces({1}, {{{1, 1, 1}}})), InputError);
-  EXPECT_THROW(compare_solutions(faces({1, 1}, {{{1, 1, 1}}, {{1, 1, 1}}}), faces({1, 2}, {{{1, 1, 1}}, {{1, 1, 1}}})),
-               InputError);
+  expect_refused(faces({1, 1}, {{{1, 1, 1}}, {{1, 1, 1}}}), faces({1}, {{{1, 1, 1}}}),
+                 "the solutions have different faces (2 and 1): not the same mesh");
+  expect_refused(faces({1, 1}, {{{1, 1, 1}}, {{1, 1, 1}}}), faces({1, 2}, {{{1, 1, 1}}, {{1, 1, 1}}}),
+                 "face 1 has area 1 in one solution and 2 in the other: not the same mesh");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  expect_refused(faces({1}, {{{1, nan, 1}}}), faces({1}, {{{1, 1, 1}}}), "face 0 has a radiosity that is not a number");
 }
 
 void write_ply(const std::filesystem::path& path, const std::string& header, const std::string& body) {
@@ -100,6 +116,19 @@ TEST(Compare, ReaderNamesWhatIsWrongWithAFile) {
   expect_refused(dir / "ascii.ply", "not binary_little_endian");
   write_ply(dir / "text.ply", "not a ply\n", "");
   expect_refused(dir / "text.ply", "no 'ply' magic");
+  // Headers that are not mpath's: each names what it found.
+  for (const auto& [from, to, says] : std::vector<std::array<std::string, 3>>{
+           {"element face 2", "element face", "element without a count: element face"},
+           {"element vertex 0", "element vertox 0", "unexpected element vertox"},
+           {"property float area", "property list uchar int area", "unexpected list property: property list uchar int area"},
+           {"property float B_r", "property flaot B_r", "unknown property type flaot"},
+           {"property list uchar int vertex_indices\n", "", "faces have no vertex_indices list"},
+           {"end_header\n", "", "the header has no end_header"}}) {
+    std::string h = head;
+    h.replace(h.find(from), from.size(), to);
+    write_ply(dir / "header.ply", h, face + face);
+    expect_refused(dir / "header.ply", "header.ply: not an mpath solution.ply: " + says);
+  }
 }
 
 const std::string kRoom = std::string(MPATH_SOURCE_DIR) + "/configs/room.toml";
