@@ -1,6 +1,9 @@
 #include "report.h"
 
+#include <numbers>
+
 #include "atomic_file.h"
+#include "color.h"
 #include "mpath_version.h"
 #include "tracer.h"
 
@@ -55,6 +58,40 @@ json energy_json(const RadiosityState& s) {
                             {"in_transit", held_rgb}}}};
 }
 
+// Per material: the area its faces cover (a two-sided surface counts both
+// faces), and their area means of emitted exitance, radiosity (W/m2, per
+// channel) and luminance (cd/m2; a diffuse surface's luminance is its
+// radiosity's luminous exitance over pi).
+json material_json(const PreparedScene& prepared, const RadiosityState& state) {
+  const PatchMesh& mesh = prepared.mesh;
+  const std::vector<SolutionFace> faces = state.solution_faces(mesh);
+  const size_t n = prepared.scene.materials.size();
+  std::vector<double> area(n, 0.0);
+  std::vector<Rgb> emitted(n, Rgb{0, 0, 0}), radiosity(n, Rgb{0, 0, 0});
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const int m = mesh.patches[mesh.face_patch[f]].material;
+    const double a = mesh.face_area(static_cast<int>(f));
+    area[m] += a;
+    for (int c = 0; c < 3; ++c) {
+      emitted[m][c] += a * faces[f].exitance[c];
+      radiosity[m][c] += a * faces[f].radiosity[c];
+    }
+  }
+  json out = json::array();
+  for (size_t m = 0; m < n; ++m) {
+    if (area[m] <= 0) continue;  // no face of it in the mesh
+    Rgb e, b;
+    for (int c = 0; c < 3; ++c) {
+      e[c] = emitted[m][c] / area[m];
+      b[c] = radiosity[m][c] / area[m];
+    }
+    out.push_back({{"name", prepared.scene.materials[m].name}, {"area_m2", area[m]},
+                   {"exitance_W_m2", {e[0], e[1], e[2]}}, {"radiosity_W_m2", {b[0], b[1], b[2]}},
+                   {"luminance_cd_m2", kWhiteEfficacy * luminance(b) / std::numbers::pi}});
+  }
+  return out;
+}
+
 }  // namespace
 
 json solve_report(const Options& options, const PreparedScene& prepared, const RadiosityState& state,
@@ -100,6 +137,7 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
                       : json(nullptr)},
       {"hierarchy", store ? hierarchy_json(*store, state, r.box_stats) : json(nullptr)},
       {"energy", energy_json(state)},
+      {"materials", material_json(prepared, state)},
       {"outputs", r.outputs},
       {"grids", r.grids},
       {"warnings", [&] {

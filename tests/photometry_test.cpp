@@ -195,6 +195,18 @@ TEST(Photometry, RunWritesTheGridsFilesAndFigures) {
   EXPECT_NEAR(g["uniformity"].get<double>(),
               g["illuminance_lux"]["min"].get<double>() / g["illuminance_lux"]["mean"].get<double>(), 1e-12);
   EXPECT_GT(g["uniformity"].get<double>(), 0.97);
+  // Per material: in a closed furnace the area mean of B is E / (1 - rho)
+  // exactly once converged (what is absorbed, (1 - rho) B A summed, is what
+  // is emitted), up to the unshot power left at solver.tolerance.
+  ASSERT_EQ(report["materials"].size(), 1u);
+  const auto& m = report["materials"][0];
+  EXPECT_EQ(m["name"], "grey");
+  EXPECT_NEAR(m["area_m2"].get<double>(), 2 * (4 * 3 + 4 * 2.5 + 3 * 2.5), 1e-9);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(m["exitance_W_m2"][c].get<double>(), 1.0, 1e-9);
+    EXPECT_NEAR(m["radiosity_W_m2"][c].get<double>(), 2.0, 2.0 * 2e-4);
+  }
+  EXPECT_NEAR(m["luminance_cd_m2"].get<double>(), 179 * 2.0 / std::numbers::pi, 179 * 2.0 / std::numbers::pi * 2e-4);
 }
 
 TEST(Photometry, GridConfigIsChecked) {
