@@ -205,45 +205,6 @@ TEST_P(FormFactor, FromGlobalLinesMatchesHowell) {
 INSTANTIATE_TEST_SUITE_P(Squares, FormFactor, ::testing::Values(false, true),
                          [](const auto& info) { return info.param ? "Perpendicular" : "Parallel"; });
 
-// A one-sided blocker (3 x 3, between the parallel squares, facing the
-// receiver) whose back the emitter sees: with an invisible back (MGF's
-// one-sided surfaces) the receiver gets Howell's unobstructed form factor,
-// by local and by global lines, and the blocker's front gets nothing from
-// the emitter; with a black back (OBJ's) nothing reaches the receiver.
-TEST(OneSided, AnInvisibleBackIsNotThereForLinesFromBehind) {
-  for (const bool invisible : {true, false}) {
-    Scene scene = two_squares(false);
-    const int blocker = test::add_material(scene, "blocker", 0.5, 0.0);
-    scene.materials[blocker].invisible_back = invisible;
-    test::add_quad(scene, {-1, -1, 0.5}, {2, -1, 0.5}, {2, 2, 0.5}, {-1, 2, 0.5}, blocker,
-                   test::add_object(scene, "blocker"));  // faces +z: its back towards A at z = 0
-    const PatchMesh mesh = build_mesh(scene, 100.0);
-    ASSERT_EQ(mesh.patch_faces[2][1], invisible ? kInvisibleBack : kBlackBack);
-    const Tracer tracer(mesh);
-    // Local lines (the first shot).
-    RadiosityState state = make_state(scene, mesh);
-    const long long lines = 400'000;
-    first_shot(mesh, tracer, state, lines, 7, 2);
-    const double f = (state.phi[1] - state.emitted_power[1]) / 0.5 / state.emitted_total();
-    const double sigma = std::sqrt(kParallelF * (1 - kParallelF) / lines);
-    if (invisible) {
-      EXPECT_NEAR(f, kParallelF, 4 * sigma);
-      EXPECT_EQ(state.phi[2], 0.0);  // the blocker's front faces away from A
-    } else {
-      EXPECT_EQ(f, 0.0);
-    }
-    // Global lines: every crossing of the blocker's back is gone.
-    std::vector<LineHit> hits;
-    tracer.all_hits({0.5, 0.5, -1}, {0, 0, 1}, 10, hits);
-    ASSERT_EQ(hits.size(), invisible ? 2u : 3u);
-    if (invisible) EXPECT_EQ(hits[1].patch, 1);
-    // Camera rays: from below, the receiver through the blocker; from above,
-    // the blocker's front.
-    EXPECT_EQ(tracer.nearest({0.5, 0.5, 0.25}, {0, 0, 1}, 0, 10).patch, invisible ? 1 : 2);
-    EXPECT_EQ(tracer.nearest({0.5, 0.5, 0.75}, {0, 0, -1}, 0, 10).patch, 2);
-  }
-}
-
 TEST(Reproducibility, SameSeedAndThreadsGiveIdenticalResults) {
   const Options o = test_options(200'000, 50'000, 0.05);
   const auto a = solve_classic_in_memory(furnace_scene(0.6, 1.0), o);

@@ -23,15 +23,11 @@ struct Patch {
   bool is_triangle() const { return v[3] == v[2]; }
 };
 
-inline constexpr int kBlackBack = -1, kInvisibleBack = -2;
-
 struct PatchMesh {
   std::vector<Vec3> vertices;
   std::vector<Patch> patches;
-  // Per patch: front and back face, kBlackBack or kInvisibleBack for the back
-  // of a one-sided patch (kept apart from Patch so the hot transport loop
-  // reads 8 bytes a crossing). Lines never meet an invisible back: the
-  // tracer passes through it.
+  // Per patch: front and back face, -1 for a black back (kept apart from
+  // Patch so the hot transport loop reads 8 bytes a crossing).
   std::vector<std::array<int, 2>> patch_faces;
   std::vector<int> face_patch;     // face -> patch
   std::vector<uint8_t> face_side;  // face -> 0 front, 1 back
@@ -47,7 +43,7 @@ struct PatchMesh {
   }
   double face_area(int face) const { return patches[face_patch[face]].area; }
   // The side of `patch` a line along `dir` meets (0 front, 1 back), and its
-  // face there (negative: the back of a one-sided patch).
+  // face there (-1: the black back of a one-sided patch).
   int side_met(int patch, const Vec3& dir) const { return dot(patches[patch].normal, dir) < 0 ? 0 : 1; }
   int face_met(int patch, const Vec3& dir) const { return patch_faces[patch][side_met(patch, dir)]; }
 };

@@ -15,9 +15,6 @@ struct Material {
   Rgb rho{0.5, 0.5, 0.5};   // diffuse reflectance, each in [0, 1)
   Rgb emission{0, 0, 0};    // emitted radiance, W/sr/m2 (exitance is pi times this)
   bool two_sided = false;
-  // A one-sided surface seen from behind: black (it absorbs what reaches
-  // it; OBJ and PLY) or not there at all (MGF, as its specification says).
-  bool invisible_back = false;
 
   bool emits() const { return emission[0] > 0 || emission[1] > 0 || emission[2] > 0; }
 };

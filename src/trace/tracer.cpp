@@ -12,14 +12,7 @@ namespace {
 struct CollectContext {
   RTCIntersectContext context;
   std::vector<LineHit>* hits;
-  const uint8_t* invisible_back;  // per traced patch; null when no patch has one
 };
-
-// The direction of the filter's ray.
-Vec3 ray_dir(const RTCFilterFunctionNArguments* args) {
-  return {RTCRayN_dir_x(args->ray, args->N, 0), RTCRayN_dir_y(args->ray, args->N, 0),
-          RTCRayN_dir_z(args->ray, args->N, 0)};
-}
 
 void collect_filter(const RTCFilterFunctionNArguments* args) {
   auto* ctx = reinterpret_cast<CollectContext*>(args->context);
@@ -29,9 +22,7 @@ void collect_filter(const RTCFilterFunctionNArguments* args) {
   const float facing = RTCHitN_Ng_x(args->hit, args->N, 0) * RTCRayN_dir_x(args->ray, args->N, 0) +
                        RTCHitN_Ng_y(args->hit, args->N, 0) * RTCRayN_dir_y(args->ray, args->N, 0) +
                        RTCHitN_Ng_z(args->hit, args->N, 0) * RTCRayN_dir_z(args->ray, args->N, 0);
-  // A line along the normal meets the back: not there at all when invisible.
-  if (!(facing > 0 && ctx->invisible_back && ctx->invisible_back[prim]))
-    ctx->hits->push_back({static_cast<double>(t), static_cast<int>(prim), facing > 0});
+  ctx->hits->push_back({static_cast<double>(t), static_cast<int>(prim), facing > 0});
   args->valid[0] = 0;  // reject, so traversal goes on to the next hit
 }
 
@@ -74,25 +65,11 @@ void leave_filter(const RTCFilterFunctionNArguments* args) {
   const auto& patches = ctx->mesh->patches;
   const int a = ctx->tracer->global(prim);
   const int b = ctx->tracer->global(ctx->from);
-  if (ctx->mesh->face_met(a, ray_dir(args)) == kInvisibleBack) args->valid[0] = 0;
-  else if (t <= ctx->contact && dot(patches[a].normal, patches[b].normal) > 0) args->valid[0] = 0;
+  if (t <= ctx->contact && dot(patches[a].normal, patches[b].normal) > 0) args->valid[0] = 0;
   // A line that leaves a patch within float rounding of an edge of its own
   // object can be placed just outside the neighbouring face and meet it at
   // once: a surface that close is the object itself, not something lit.
   else if (t <= ctx->self && patches[a].object == patches[b].object) args->valid[0] = 0;
-}
-
-// The intersect context of a nearest query: passes through invisible backs.
-struct NearestContext {
-  RTCIntersectContext context;
-  const PatchMesh* mesh;
-  const Tracer* tracer;
-};
-
-void nearest_filter(const RTCFilterFunctionNArguments* args) {
-  auto* ctx = reinterpret_cast<NearestContext*>(args->context);
-  const int a = ctx->tracer->global(static_cast<int>(RTCHitN_primID(args->hit, args->N, 0)));
-  if (ctx->mesh->face_met(a, ray_dir(args)) == kInvisibleBack) args->valid[0] = 0;
 }
 
 void embree_error(void*, RTCError code, const char* message) {
@@ -129,10 +106,6 @@ Tracer::Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset, bool 
   for (size_t i = 0; i < traced; ++i) {
     const Patch& p = mesh.patches[global(static_cast<int>(i))];
     planes_.push_back({p.normal, dot(p.normal, mesh.vertices[p.v[0]])});
-    if (mesh.patch_faces[global(static_cast<int>(i))][1] == kInvisibleBack) {
-      invisible_back_.resize(traced, 0);
-      invisible_back_[i] = 1;
-    }
   }
   device_ = rtcNewDevice("verbose=0");
   MPATH_CHECK(device_ != nullptr, "rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
@@ -175,14 +148,11 @@ std::string Tracer::embree_version() {
 }
 
 NearestHit Tracer::nearest(const Vec3& org, const Vec3& dir, double tnear, double tfar) const {
-  NearestContext ctx;
-  rtcInitIntersectContext(&ctx.context);
-  if (!invisible_back_.empty()) ctx.context.filter = nearest_filter;
-  ctx.mesh = &mesh_;
-  ctx.tracer = this;
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
   RTCRayHit rh;
   init_ray(rh, org, dir, tnear, tfar);
-  rtcIntersect1(scene_, &ctx.context, &rh);
+  rtcIntersect1(scene_, &context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
   const int local = static_cast<int>(rh.hit.primID);
   return {global(local), plane_distance(local, org, dir, rh.ray.tfar)};
@@ -234,7 +204,6 @@ void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector
   rtcInitIntersectContext(&ctx.context);
   ctx.context.filter = collect_filter;
   ctx.hits = &out;
-  ctx.invisible_back = invisible_back_.empty() ? nullptr : invisible_back_.data();
   RTCRayHit rh;
   init_ray(rh, org, dir, 0.0, tfar);
   rtcIntersect1(scene_, &ctx.context, &rh);

@@ -64,7 +64,6 @@ class Tracer {
   bool all_ = true;               // every patch of the mesh is traced
   std::vector<uint32_t> subset_;  // otherwise: traced patch -> mesh patch
   std::vector<Plane> planes_;     // per traced patch
-  std::vector<uint8_t> invisible_back_;  // per traced patch; empty when no patch has one
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   double tie_epsilon_ = 0;
