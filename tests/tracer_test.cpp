@@ -26,7 +26,9 @@ TEST(Tracer, FindsEveryHitAlongALineSortedByDistance) {
   ASSERT_EQ(hits.size(), 5u);
   for (size_t i = 0; i < hits.size(); ++i) {
     EXPECT_EQ(hits[i].patch, static_cast<int>(i));
-    if (i) EXPECT_LT(hits[i - 1].t, hits[i].t);
+    if (i) {
+      EXPECT_LT(hits[i - 1].t, hits[i].t);
+    }
   }
   const NearestHit n = tracer.nearest({0.5, 0.5, 10}, {0, 0, -1}, 0, 100);
   EXPECT_EQ(n.patch, 4);
