@@ -170,6 +170,8 @@ case("override key", "command line: malformed key 'lines..total'", over=["lines.
 case("override table", "command line: 'total' is not a table in key 'lines.total.x'", over=["lines.total.x=3"])
 case("shard", "--shard: expected i/n with 1 <= i <= n, got '3/2'", prog="preprocess", flags=["--shard", "3/2"])
 case("usage", "(see mpath-solve --help)", flags=["--no-such-flag"])
+case("override a list", "'camera' is a list of tables ([[camera]]) and cannot be overridden by key 'camera.0.width'",
+     over=["camera.0.width=3"], config=BASE + '[[camera]]\nname = "c"\nposition = [0, 0, 5]\n')
 
 # ---- scene files, every format ---------------------------------------------
 case("scene missing", "file not found", files={"s.obj": None})

@@ -67,6 +67,9 @@ void apply_override(toml::table& root, const std::string& assignment, std::set<s
       break;
     }
     auto [it, inserted] = node->insert(part, toml::table{});
+    if (it->second.is_array_of_tables())
+      throw InputError(fmt::format("command line: '{}' is a list of tables ([[{}]]) and cannot be overridden by key "
+                                   "'{}'; set it in the config file", part, part, key));
     node = it->second.as_table();
     if (!node) throw InputError(fmt::format("command line: '{}' is not a table in key '{}'", part, key));
     start = dot + 1;
