@@ -167,7 +167,15 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
   }
   std::sort(keys.begin(), keys.end());  // ties by line index: a stable order
   out.resize(n);
-  for (uint64_t i = 0; i < n; ++i) std::swap(out[i], scratch[keys[i].second]);
+  for (uint64_t i = 0; i < n; ++i) {
+    std::swap(out[i], scratch[keys[i].second]);
+    // Event lists pass from line to line between chunks; one that held a
+    // long line would keep that memory for ever, and over many chunks every
+    // list would grow to the longest line's size (peak memory grew with
+    // lines.total). Lists are kept within twice what they hold.
+    std::vector<Event>& e = out[i].events;
+    if (e.capacity() > 2 * e.size() + 8) e.shrink_to_fit();
+  }
 }
 
 }  // namespace mpath
