@@ -72,7 +72,7 @@ TEST(Compare, RefusesSolutionsOfDifferentMeshes) {
                  "the solutions have different faces (2 and 1): not the same mesh");
   expect_refused(faces({1, 1}, {{{1, 1, 1}}, {{1, 1, 1}}}), faces({1, 2}, {{{1, 1, 1}}, {{1, 1, 1}}}),
                  "face 1 has area 1 in one solution and 2 in the other: not the same mesh");
-  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
   expect_refused(faces({1}, {{{1, nan, 1}}}), faces({1}, {{{1, 1, 1}}}), "face 0 has a radiosity that is not a number");
 }
 
