@@ -7,6 +7,7 @@
 #include "atomic_file.h"
 #include "box_file.h"
 #include "error.h"
+#include "json_text.h"
 
 namespace mpath::linestore {
 
@@ -29,7 +30,7 @@ void write_manifest(const fs::path& path, const Manifest& m) {
                   {"chunk_lines", m.chunk_lines},       {"boxes", boxes},
                   {"files", files}};
   AtomicFile file(path, partial_path(path));
-  file.stream() << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
+  file.stream() << json_text(j);
   file.commit();
 }
 

@@ -15,6 +15,7 @@
 #include "error.h"
 #include "hash.h"
 #include "hierarchy.h"
+#include "json_text.h"
 #include "line_budget.h"
 #include "line_tracing.h"
 #include "directory_lock.h"
@@ -272,7 +273,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
                                  {"peak_rss_bytes", peak_rss_bytes()}, {"boxes", per_box}};
   write_text_file(dir / (shard.count == 1 ? std::string("preprocess.json")
                                           : fmt::format("preprocess.part{:04}of{:04}.json", shard.index, shard.count)),
-                  timings.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+                  json_text(timings));
   spdlog::info("{}: {} box file(s), {} lines, {} events, {:.3f} bytes/event on disk ({:.2f} before compression), {:.1f} MB",
                dir.string(), m.files.size(), stats.lines, stats.events,
                stats.events ? double(stats.bytes) / stats.events : 0.0,

@@ -15,6 +15,7 @@
 
 #include "atomic_file.h"
 #include "error.h"
+#include "json_text.h"
 #include "mpath_version.h"
 #include "png_writer.h"
 #include "prepared_scene.h"
@@ -186,7 +187,7 @@ void run_compare(const Options& options, const CompareFlags& flags) {
       {"relative_error", {{"mean", c.mean_relative}, {"p50", c.p50}, {"p90", c.p90}, {"p99", c.p99}}},
       {"images", images},
       {"colour_map", {{"scale", flags.scale}, {"colours", map}}}};
-  write_text_file(flags.out / "compare.json", out.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  write_text_file(flags.out / "compare.json", json_text(out));
 }
 
 }  // namespace mpath

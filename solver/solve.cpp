@@ -12,6 +12,7 @@
 #include "classic.h"
 #include "error.h"
 #include "first_shot.h"
+#include "json_text.h"
 #include "mpath_version.h"
 #include "prepared_scene.h"
 #include "photometry.h"
@@ -239,7 +240,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
 
   record.timings.total = seconds_since(start);
   const nlohmann::json report = solve_report(options, prepared, state, store.get(), record);
-  write_text_file(options.output.dir / "report.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  write_text_file(options.output.dir / "report.json", json_text(report));
   spdlog::info("results in {} ({:.2f} s in all)", options.output.dir.string(), seconds_since(start));
 }
 
