@@ -513,8 +513,8 @@ NOT_USER_FACING = {
     "cannot read file": "a store file that cannot be read: permissions (see 'cannot open file')",
     "read error or cut short": "a store file cut while it is being hashed: a race with another program",
     "the store has {} box(es), this scene and config build": "the layout check before it refuses first",
-    "cannot open file": "a scene file that exists but cannot be opened: permissions, which the tests (run as root "
-                        "in CI) cannot take away",
+    "cannot open file": "a scene file that exists but cannot be opened: permissions, which a test running as root "
+                        "(as on this project's machines) cannot take away",
 }
 # Messages behind the store's whole-file hash: only a file whose hash in the
 # manifest was made to match reaches them (Store.DamageBehindAMatchingManifest
