@@ -8,8 +8,8 @@
 
 #include "atomic_file.h"
 #include "checkpoint.h"
-#include "directory_lock.h"
 #include "classic.h"
+#include "directory_lock.h"
 #include "error.h"
 #include "first_shot.h"
 #include "json_text.h"
