@@ -62,14 +62,19 @@ bool contains(const Bounds& box, const Bounds& inner, double eps) {
 
 namespace {
 
-// Boxes of grouping items in a loose multi-level grid: level L has cells of
-// size base * 2^L, and a box sits in the cell of its centre at the finest
-// level whose cells are at least as large as the box, so that it lies within
-// its cell grown by half a cell each way. A query returns the boxes of every
-// cell whose grown extent meets a region (a superset of the boxes meeting
-// it), in no particular order; entries are never removed (callers skip dead
-// items). Build work and queries are near linear where the scene is (the
-// grouping compared every pair of items before).
+// Boxes of grouping items in a loose octree: level L has cells of size
+// base * 2^L, and a box sits in the cell of its centre at the finest level
+// whose cells are at least as large as the box, so that it lies within its
+// cell grown by half a cell each way (and a cell's descendants' boxes within
+// it grown by a quarter). A query returns the boxes of every cell whose grown
+// extent meets a region (a superset of the boxes meeting it), in no
+// particular order, descending from the coarsest cells into the occupied
+// children in range only, so that its work follows the occupied cells near
+// the region rather than every cell of a level; entries are never removed
+// (callers skip dead items). Build work and queries are near linear where
+// the scene is (the grouping compared every pair of items before, and then
+// scanned every occupied cell of a level for a region larger than a few of
+// its cells, quadratic on large scenes: docs/performance.md).
 class LooseGrid {
  public:
   LooseGrid(const Bounds& scene) : origin_(scene.lo) {
@@ -83,9 +88,23 @@ class LooseGrid {
     while (level < kLevels && base_ * double(1 << level) < extent) ++level;
     const double cell = base_ * double(1 << level);
     const Vec3 c = b.center();
-    std::array<long long, 3> k{};
+    Cell k{};
     for (int i = 0; i < 3; ++i) k[i] = clamp_cell(std::floor((c[i] - origin_[i]) / cell), level);
-    levels_[level][key(k)].push_back(id);
+    levels_[level][key(k)].ids.push_back(id);
+    // The chain of ancestors up to the coarsest level, each knowing its child.
+    for (int l = level; l < kLevels; ++l) {
+      Cell parent{};
+      int bit = 0;
+      for (int i = 0; i < 3; ++i) {
+        parent[i] = k[i] >> 1;  // floor(k / 2), k may be negative
+        bit |= int(k[i] - 2 * parent[i]) << i;
+      }
+      Node& up = levels_[l + 1][key(parent)];
+      const bool known = up.children & (1u << bit);
+      up.children |= uint8_t(1u << bit);
+      if (known) break;
+      k = parent;
+    }
   }
 
   // Calls f(id) for every box whose cell's grown extent meets `r`, after
@@ -108,34 +127,44 @@ class LooseGrid {
 
  private:
   static constexpr int kLevels = 20;  // the finest cells: a millionth of the scene's diagonal
-  using Levels = std::array<std::unordered_map<uint64_t, std::vector<int>>, kLevels + 1>;
+  using Cell = std::array<long long, 3>;
+  struct Node {
+    std::vector<int> ids;  // boxes of this level whose centre is in the cell
+    uint8_t children = 0;  // bit x + 2y + 4z: the child cell (2k + (x, y, z)) is occupied
+  };
+  using Levels = std::array<std::unordered_map<uint64_t, Node>, kLevels + 1>;
 
   // visit(ids) for the cells of `levels` (const or not) whose grown extent meets `r`.
   template <typename L, typename V>
   void visit_cells(L& levels, const Bounds& r, const V& visit) const {
+    std::array<Cell, kLevels + 1> lo{}, hi{};  // per level: the cells in range
     for (int level = 0; level <= kLevels; ++level) {
-      auto& cells = levels[level];
-      if (cells.empty()) continue;
       const double cell = base_ * double(1 << level);
-      std::array<long long, 3> lo{}, hi{};
-      double count = 1;
       for (int i = 0; i < 3; ++i) {
-        lo[i] = clamp_cell(std::floor((r.lo[i] - origin_[i]) / cell - 1.5), level);
-        hi[i] = clamp_cell(std::floor((r.hi[i] - origin_[i]) / cell + 0.5), level);
-        count *= double(hi[i] - lo[i] + 1);
+        lo[level][i] = clamp_cell(std::floor((r.lo[i] - origin_[i]) / cell - 1.5), level);
+        hi[level][i] = clamp_cell(std::floor((r.hi[i] - origin_[i]) / cell + 0.5), level);
       }
-      if (count > double(cells.size())) {  // fewer occupied cells than cells in range: visit those
-        for (auto& [k, ids] : cells) {
-          const std::array<long long, 3> c = unkey(k);
-          if (c[0] >= lo[0] && c[0] <= hi[0] && c[1] >= lo[1] && c[1] <= hi[1] && c[2] >= lo[2] && c[2] <= hi[2])
-            visit(ids);
-        }
-        continue;
+    }
+    auto in_range = [&](int level, const Cell& c) {
+      for (int i = 0; i < 3; ++i)
+        if (c[i] < lo[level][i] || c[i] > hi[level][i]) return false;
+      return true;
+    };
+    // Depth first from each coarsest cell in range, into occupied children in range.
+    auto descend = [&](auto& self, int level, const Cell& c, auto& node) -> void {
+      if (!node.ids.empty()) visit(node.ids);
+      if (level == 0 || node.children == 0) return;
+      for (int bit = 0; bit < 8; ++bit) {
+        if (!(node.children & (1u << bit))) continue;
+        const Cell child{2 * c[0] + (bit & 1), 2 * c[1] + ((bit >> 1) & 1), 2 * c[2] + ((bit >> 2) & 1)};
+        if (!in_range(level - 1, child)) continue;
+        const auto it = levels[level - 1].find(key(child));
+        if (it != levels[level - 1].end()) self(self, level - 1, child, it->second);
       }
-      for (long long x = lo[0]; x <= hi[0]; ++x)
-        for (long long y = lo[1]; y <= hi[1]; ++y)
-          for (long long z = lo[2]; z <= hi[2]; ++z)
-            if (const auto it = cells.find(key({x, y, z})); it != cells.end()) visit(it->second);
+    };
+    for (auto& [k, node] : levels[kLevels]) {
+      const Cell c = unkey(k);
+      if (in_range(kLevels, c)) descend(descend, kLevels, c, node);
     }
   }
 
@@ -143,13 +172,13 @@ class LooseGrid {
     const double most = double((1LL << (kLevels - level)) + 2);
     return static_cast<long long>(std::clamp(c, -2.0, most));
   }
-  static uint64_t key(const std::array<long long, 3>& k) {
+  static uint64_t key(const Cell& k) {
     uint64_t out = 0;
     for (long long v : k) out = (out << 21) | static_cast<uint64_t>(v + 4);
     return out;
   }
-  static std::array<long long, 3> unkey(uint64_t k) {
-    std::array<long long, 3> out{};
+  static Cell unkey(uint64_t k) {
+    Cell out{};
     for (int i = 2; i >= 0; --i, k >>= 21) out[i] = static_cast<long long>(k & ((1u << 21) - 1)) - 4;
     return out;
   }
