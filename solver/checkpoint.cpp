@@ -91,7 +91,7 @@ class Reader {
 
 }  // namespace
 
-std::string checkpoint_key(const Options& options, const PatchMesh& mesh, int threads) {
+std::string checkpoint_key(const Options& options, const PatchMesh& mesh) {
   Options o = options;
   o.solver.iterations = 0;
   o.solver.tolerance = 0;
@@ -99,8 +99,8 @@ std::string checkpoint_key(const Options& options, const PatchMesh& mesh, int th
   o.cameras.clear();
   o.grids.clear();
   o.store.zstd_level = 0;
-  // Where files live does not change the state (their contents are hashed below);
-  // the thread count is added as the effective one.
+  // Where files live does not change the state (their contents are hashed
+  // below), nor do threads and ranks (solver.shards fixes the work's parts).
   o.store.dir.clear();
   o.scene.file.clear();
   o.solver.threads = 0;
@@ -108,7 +108,6 @@ std::string checkpoint_key(const Options& options, const PatchMesh& mesh, int th
   h.add(options_to_toml(o));
   h.add(hash_file(options.scene.file));
   h.add(mesh_hash(mesh));
-  h.add(std::to_string(threads));
   return hex64(h.value());
 }
 

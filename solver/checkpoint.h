@@ -13,8 +13,8 @@
 namespace mpath {
 
 // Everything a solve's state depends on, hashed: scene, mesh, method, lines,
-// first shot, emitters, threads; not the iteration cap, tolerance or outputs.
-std::string checkpoint_key(const Options& options, const PatchMesh& mesh, int threads);
+// first shot, emitters, shards (not threads or ranks); not the iteration cap, tolerance or outputs.
+std::string checkpoint_key(const Options& options, const PatchMesh& mesh);
 
 void write_checkpoint(const std::filesystem::path& path, const std::string& key, const RadiosityState& state,
                       const IterationLog& log);

@@ -273,7 +273,7 @@ struct BoxResult {
   BoxPassStats stats;
 };
 
-BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int threads, double power_per_line,
+BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shards_wanted, double power_per_line,
                    unsigned pass, Progress& progress) {
   const auto start = std::chrono::steady_clock::now();
   const BoxInputs in = start_box(store, b, state, power_per_line, pass);
@@ -282,7 +282,7 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int thre
   const uint64_t chunks = in.parts.size();
   const bool every_line = in.fraction >= 1.0;
   const uint64_t pass_lines = part_lines(in.parts, 0, chunks);
-  const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
+  const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(shards_wanted, chunks)));
   std::vector<BoxShard> acc(shards);
   for_each_shard(shards, [&](int s) {
     BoxShard& a = acc[s];
@@ -417,7 +417,7 @@ Remaining remaining_power(const BoxStore& store, const RadiosityState& state) {
 }
 
 uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, RadiosityState& state,
-                         unsigned pass, unsigned long long seed, int threads) {
+                         unsigned pass, unsigned long long seed, int shards_wanted) {
   const int ch = state.channels;
   std::vector<int> faces;
   for (size_t b = 0; b < store.box_count(); ++b) {
@@ -430,15 +430,15 @@ uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxS
       if (any) faces.push_back(g);
     }
   }
-  return shoot_unshot(mesh, tracer, faces, state, pass, seed, threads);
+  return shoot_unshot(mesh, tracer, faces, state, pass, seed, shards_wanted);
 }
 
 uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<int> faces, RadiosityState& state,
-                      unsigned pass, unsigned long long seed, int threads) {
+                      unsigned pass, unsigned long long seed, int shards_wanted) {
   const int ch = state.channels;
   if (faces.empty()) return 0;
   std::sort(faces.begin(), faces.end());
-  const int shards = std::max(1, std::min<int>(threads, static_cast<int>(faces.size())));
+  const int shards = std::max(1, std::min<int>(shards_wanted, static_cast<int>(faces.size())));
   std::vector<ShardAccumulator> acc(shards);
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   for_each_shard(shards, [&](int s) {
@@ -463,14 +463,14 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<i
 }
 
 PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store,
-                           RadiosityState& state, const IterationLog& log, unsigned pass, int threads,
+                           RadiosityState& state, const IterationLog& log, unsigned pass, int shards_wanted,
                            std::vector<BoxPassStats>* per_box, uint64_t* uncarried) {
   if (const LineSets* sets = store.line_sets())
-    return line_set_iteration(mesh, tracer, store, *sets, state, pass, threads, line_power(options, store, log),
+    return line_set_iteration(mesh, tracer, store, *sets, state, pass, shards_wanted, line_power(options, store, log),
                               options.lines.seed, per_box, uncarried);
-  PassStats p = hierarchical_iteration(store, state, pass, threads, line_power(options, store, log),
+  PassStats p = hierarchical_iteration(store, state, pass, shards_wanted, line_power(options, store, log),
                                        options.solver.schedule == "v-cycle", per_box);
-  const uint64_t shot = shoot_uncarried(mesh, tracer, store, state, pass, options.lines.seed, threads);
+  const uint64_t shot = shoot_uncarried(mesh, tracer, store, state, pass, options.lines.seed, shards_wanted);
   if (uncarried) *uncarried += shot;
   p.unshot_fraction = state.remaining_fraction();
   return p;
@@ -488,7 +488,7 @@ void chunk_line_order(unsigned pass, int box, uint64_t chunk, size_t n, std::vec
   std::shuffle(order.begin(), order.end(), rng);
 }
 
-PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, unsigned pass, int threads,
+PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, unsigned pass, int shards_wanted,
                                  double power_per_line, bool v_cycle, std::vector<BoxPassStats>* per_box) {
   const auto start = std::chrono::steady_clock::now();
   const Hierarchy& h = store.hierarchy();
@@ -515,7 +515,7 @@ PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, u
     const unsigned rotation = pass * 2 + (i < levels.size() - depth - 1 ? 1 : 0);  // the up-sweep takes other lines
     results[i].resize(boxes.size());
     tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t k) {
-      results[i][k] = box_pass(store, boxes[k], state, threads, power_per_line, rotation, progress);
+      results[i][k] = box_pass(store, boxes[k], state, shards_wanted, power_per_line, rotation, progress);
     });
   }
   progress.finish();

@@ -56,16 +56,16 @@ Remaining remaining_power(const BoxStore& store, const RadiosityState& state);
 // returns the local lines cast. Run after each iteration.
 inline constexpr int kUncarriedLines = 16;
 uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, RadiosityState& state,
-                         unsigned pass, unsigned long long seed, int threads);
+                         unsigned pass, unsigned long long seed, int shards_wanted);
 // The unshot power of `faces` shot with kUncarriedLines local lines each.
 uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<int> faces, RadiosityState& state,
-                      unsigned pass, unsigned long long seed, int threads);
+                      unsigned pass, unsigned long long seed, int shards_wanted);
 
 // One iteration of mpath-solve's stored-line methods with the options'
 // schedule and line power: hierarchical_iteration, then shoot_uncarried
 // (its local lines added to `uncarried` when given).
 PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store,
-                           RadiosityState& state, const IterationLog& log, unsigned pass, int threads,
+                           RadiosityState& state, const IterationLog& log, unsigned pass, int shards_wanted,
                            std::vector<BoxPassStats>* per_box = nullptr, uint64_t* uncarried = nullptr);
 
 // The order in which pass `pass` takes the n lines of chunk `chunk` of box
@@ -138,7 +138,7 @@ void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart
 // and AR sending at most its quota and keeping what no line took.
 // `v_cycle`: the subscenes also pass before the root, deepest first, so that
 // power crosses every level up and down in one iteration (docs/algorithm.md).
-PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, unsigned pass, int threads,
+PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, unsigned pass, int shards_wanted,
                                  double power_per_line = 0.0, bool v_cycle = false,
                                  std::vector<BoxPassStats>* per_box = nullptr);
 

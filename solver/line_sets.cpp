@@ -272,7 +272,7 @@ void pool_classes(const LineSets& sets, size_t face, uint32_t from, int to, int 
 }
 
 SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, RadiosityState& state, Flight& flight,
-                   int threads, unsigned pass, Progress& progress) {
+                   int shards_wanted, unsigned pass, Progress& progress) {
   const auto start = std::chrono::steady_clock::now();
   const StoreBox& box = store.box(x);
   const LineSetBox& lines = sets.boxes[x];
@@ -315,7 +315,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   }
   const uint64_t chunks = parts.size();
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
-  const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(threads, chunks)));
+  const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(shards_wanted, chunks)));
   std::vector<SetShard> acc(shards);
   for_each_shard(shards, [&](int s) {
     SetShard& a = acc[s];
@@ -420,7 +420,7 @@ void plan_iteration(const BoxStore& store, const LineSets& sets, const Radiosity
 }
 
 PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, const LineSets& sets,
-                             RadiosityState& state, unsigned pass, int threads, double power_per_line,
+                             RadiosityState& state, unsigned pass, int shards_wanted, double power_per_line,
                              unsigned long long seed, std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines) {
   const auto start = std::chrono::steady_clock::now();
   const Hierarchy& h = store.hierarchy();
@@ -445,7 +445,7 @@ PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const 
     const std::vector<int>& boxes = at_depth[d];
     std::vector<SetResult> results(boxes.size());
     tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t k) {
-      results[k] = set_pass(store, sets, boxes[k], state, flight, threads, rotation, progress);
+      results[k] = set_pass(store, sets, boxes[k], state, flight, shards_wanted, rotation, progress);
     });
     for (size_t k = 0; k < boxes.size(); ++k) {
       for (int c = 0; c < ch; ++c) {
@@ -468,7 +468,7 @@ PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const 
         waiting.push_back(f);
         break;
       }
-  const uint64_t shot = shoot_unshot(mesh, tracer, waiting, state, pass, seed, threads);
+  const uint64_t shot = shoot_unshot(mesh, tracer, waiting, state, pass, seed, shards_wanted);
   if (uncarried_lines) *uncarried_lines += shot;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.unshot_fraction = state.remaining_fraction();

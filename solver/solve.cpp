@@ -69,12 +69,12 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
                : 0LL;
   };
   record.shot = first_shot(mesh, tracer, state, lights.empty() ? options.first_shot.lines : share(faces_power),
-                           options.lines.seed, record.threads, emitter_crossings(options, std::move(crossings)),
+                           options.lines.seed, options.solver.shards, emitter_crossings(options, std::move(crossings)),
                            accelerated.get());
   for (size_t l = 0; l < lights.size(); ++l) {
     const long long lines = std::max<long long>(10'000, share(lights[l].power() * state.channels));
     const uint64_t shot =
-        shoot_light(mesh, tracer, state, lights[l], lines, options.lines.seed + 7919 * (l + 1), record.threads);
+        shoot_light(mesh, tracer, state, lights[l], lines, options.lines.seed + 7919 * (l + 1), options.solver.shards);
     record.shot.lines += shot;
     record.lights[l].first_shot_lines = shot;
   }
@@ -91,13 +91,13 @@ void run_iterations(const Options& options, const PatchMesh& mesh, const Tracer&
   if (store) {
     iterate(options, state, log,
             [&](unsigned pass) {
-              return stored_iteration(options, mesh, tracer, *store, state, log, pass, record.threads,
+              return stored_iteration(options, mesh, tracer, *store, state, log, pass, options.solver.shards,
                                       &record.box_stats, &record.uncarried_lines);
             }, save);
   } else {
     iterate(options, state, log, [&](unsigned pass) {
       return classic_pass(mesh, tracer, state, classic_pass_lines(options, mesh, log, state), options.lines.seed, pass,
-                          record.threads, options.lines.sequence);
+                          options.solver.shards, options.lines.sequence);
     }, save);
   }
   record.timings.iterations = seconds_since(start);
@@ -232,7 +232,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   }
   if (store) add_ar_state(*store, state);
   spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
-  const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, mesh, record.threads)};
+  const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, mesh)};
   start_state(options, flags, mesh, tracer, store.get(), checkpoint, lights, state, record);
   run_iterations(options, mesh, tracer, store.get(), checkpoint, state, record);
   log_remaining(options, mesh, store.get(), state, record.iterations, record.warnings);

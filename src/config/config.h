@@ -85,6 +85,10 @@ struct Options {
     // first, the root, then top-down) or "top-down" (MP(root) of paper figure 5).
     std::string schedule = "v-cycle";
     int threads = 0;  // 0: all hardware threads
+    // Every pass splits its work into this many shards (fewer when a box has
+    // fewer chunks), merged in shard order: the answer does not depend on
+    // the threads or MPI ranks that run them (docs/algorithm.md).
+    int shards = 8;
   } solver;
 
   struct Store {

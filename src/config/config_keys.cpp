@@ -391,7 +391,7 @@ std::vector<ConfigKey> make_table() {
        "no subscene gets fewer lines per unit of box surface than this times the root's (all boxes scaled down alike "
        "when the floors ask for more than `lines.total`)",
        SET(o.lines.min_density = in_range(get_number(n, s), 0.0, 1e6, s)), GET(o.lines.min_density)},
-      {"lines.seed", "seed of every random choice; same config, seed and threads give identical results",
+      {"lines.seed", "seed of every random choice; same config and seed give identical results on any number of threads",
        SET(const long long v = get_integer(n, s);
            if (v < 0) bad_value(s, "expected a non-negative integer");
            o.lines.seed = static_cast<unsigned long long>(v)),
@@ -418,6 +418,10 @@ std::vector<ConfigKey> make_table() {
        SET(o.solver.tolerance = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.solver.tolerance)},
       {"solver.threads", "worker threads; 0 uses every hardware thread",
        SET(o.solver.threads = static_cast<int>(in_range(get_integer(n, s), 0, 4096, s))), GET(o.solver.threads)},
+      {"solver.shards",
+       "each pass's work in this many parts, merged in their order, so that threads and MPI ranks do not change the "
+       "answer; at most this many threads or ranks share a pass, each part holding 64 bytes per face",
+       SET(o.solver.shards = static_cast<int>(positive_at_most(get_integer(n, s), 4096, s))), GET(o.solver.shards)},
       {"solver.adaptive_lines",
        "stored-line methods: later iterations take a share of each box's lines in proportion to the power it has left "
        "to send",
