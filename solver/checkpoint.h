@@ -9,6 +9,7 @@
 #include "iteration.h"
 #include "config.h"
 #include "radiosity_state.h"
+#include "ranks.h"
 
 namespace mpath {
 
@@ -28,7 +29,10 @@ void read_checkpoint(const std::filesystem::path& path, const std::string& key, 
 struct Checkpoint {
   std::filesystem::path path;
   std::string key;
-  void save(const RadiosityState& state, const IterationLog& log) const { write_checkpoint(path, key, state, log); }
+  // Rank 0 writes it; with several MPI ranks the others hold the same state.
+  void save(const RadiosityState& state, const IterationLog& log) const {
+    if (Ranks::root()) write_checkpoint(path, key, state, log);
+  }
 };
 
 }  // namespace mpath

@@ -49,6 +49,7 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
     ShardAccumulator& a = acc[s];
     a.reset(state.faces);
     a.allowance = static_cast<double>(hi - lo) / static_cast<double>(lines);
+    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     Rng rng = make_rng(seed, kGlobalLineStream, (static_cast<unsigned long long>(pass) << 20) + s);
     std::vector<LineHit> hits;
     uint64_t since_report = 0;
@@ -67,6 +68,7 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
     progress.advance(since_report);
   });
   progress.finish();
+  sum_shards_over_ranks(acc);
   return finish_pass(in, acc, state, pass, start);
 }
 

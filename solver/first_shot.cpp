@@ -87,6 +87,7 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   tbb::parallel_for(0, shards, [&](int s) {
     ShardAccumulator& a = acc[s];
     a.reset(state.faces);
+    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     Rng rng = make_rng(seed, kFirstShotStream, static_cast<unsigned long long>(s));
     const uint64_t lo = total * s / shards, hi = total * (s + 1) / shards;
     size_t e = std::upper_bound(first.begin(), first.end(), lo) - first.begin() - 1;
@@ -110,10 +111,15 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   progress.finish();
 
   // Merge in shard order: the result does not depend on scheduling.
+  sum_shards_over_ranks(acc);
   merge_received(acc, state);
   stats.lines = total;
   stats.emitter_faces = emitters.size();
-  if (accelerated) stats.associated_hits = accelerated->shortcuts();
+  if (accelerated) {
+    uint64_t shortcuts = accelerated->shortcuts();
+    Ranks::sum(&shortcuts, 1);
+    stats.associated_hits = shortcuts;
+  }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }
@@ -130,6 +136,7 @@ uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState
   tbb::parallel_for(0, shards, [&](int s) {
     ShardAccumulator& a = acc[s];
     a.reset(state.faces);
+    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     Rng rng = make_rng(seed, kLightStream, static_cast<unsigned long long>(s));
     const double share[3] = {power / static_cast<double>(n), power / static_cast<double>(n), power / static_cast<double>(n)};
     for (uint64_t k = n * s / shards; k < n * (s + 1) / shards; ++k) {
@@ -143,6 +150,7 @@ uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState
       receive(state, mesh.face_met(hit.patch, dir), share, a);
     }
   });
+  sum_shards_over_ranks(acc);
   merge_received(acc, state);
   return n;
 }

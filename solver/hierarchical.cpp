@@ -67,6 +67,11 @@ struct alignas(128) BoxShard {
     double power[3];
   };
   std::vector<Send> sends;
+
+  void sum_over_ranks() {
+    faces.sum_over_ranks();
+    for (std::vector<double>* v : {&wall_out, &child_in, &wall_used, &child_used}) Ranks::sum(v->data(), v->size());
+  }
 };
 
 // Moves the power held in a box's ARs (from `base` in `held`) into the
@@ -291,6 +296,7 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shar
     a.child_in.assign(in.child.size() * ch, 0.0);
     a.wall_used.assign(in.wall.size(), 0.0);
     a.child_used.assign(in.child.size(), 0.0);
+    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     // With every line, the exact crossing counts make the shares add up to
     // each quota; with a part of them, each shard may send its part only.
     const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
@@ -311,6 +317,7 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shar
   });
   // Merge in shard order: faces, the box's Out, the children's In, and what
   // no line took back where it was held.
+  sum_shards_over_ranks(acc);
   BoxResult result;
   for (size_t f = 0; f < in.faces.size(); ++f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
@@ -444,6 +451,7 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<i
   for_each_shard(shards, [&](int s) {
     ShardAccumulator& a = acc[s];
     a.reset(state.faces);
+    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     for (size_t i = faces.size() * s / shards; i < faces.size() * (s + 1) / shards; ++i) {
       const int face = faces[i];
       Rng rng = make_rng(seed, kUncarriedStream, (static_cast<unsigned long long>(pass) << 32) + face);
@@ -456,6 +464,7 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<i
     }
   });
   // The shot power leaves its faces' unshot, then the hits are merged in shard order.
+  sum_shards_over_ranks(acc);
   for (int face : faces)
     for (int c = 0; c < ch; ++c) state.unshot[state.at(static_cast<size_t>(face), c)] = 0;
   merge_received(acc, state);
@@ -514,7 +523,7 @@ PassStats hierarchical_iteration(const BoxStore& store, RadiosityState& state, u
     const std::vector<int>& boxes = at_depth[levels[i]];
     const unsigned rotation = pass * 2 + (i < levels.size() - depth - 1 ? 1 : 0);  // the up-sweep takes other lines
     results[i].resize(boxes.size());
-    tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t k) {
+    for_each_box(boxes.size(), [&](size_t k) {
       results[i][k] = box_pass(store, boxes[k], state, shards_wanted, power_per_line, rotation, progress);
     });
   }

@@ -18,6 +18,7 @@
 #include "progress.h"
 #include "iteration.h"
 #include "radiosity_state.h"
+#include "ranks.h"
 #include "tracer.h"
 #include "transport.h"
 
@@ -85,6 +86,19 @@ template <typename F>
 void for_each_shard(int shards, const F& f) {
   tbb::task_group_context context(tbb::task_group_context::isolated);
   tbb::parallel_for(0, shards, f, context);
+}
+
+// Runs f(0) .. f(boxes - 1), the passes of the boxes of one depth: side by
+// side on the threads with one MPI rank; one after another with several,
+// since every rank must sum the boxes' accumulators in the same order, from
+// the thread that called main (ranks.h).
+template <typename F>
+void for_each_box(size_t boxes, const F& f) {
+  if (Ranks::size() > 1) {
+    for (size_t k = 0; k < boxes; ++k) f(k);
+    return;
+  }
+  tbb::parallel_for(size_t{0}, boxes, f);
 }
 
 struct ChunkPart {

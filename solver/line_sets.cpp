@@ -155,6 +155,8 @@ struct FaceAcc {
   double gathered[3] = {0, 0, 0};  // received, for the classes the box carries: sent on along the next crossing
   double later[3] = {0, 0, 0};     // received, for the classes of boxes above this one
 };
+// Both are summed over ranks as arrays of doubles.
+static_assert(sizeof(EntryAcc) == sizeof(double) && sizeof(FaceAcc) == 9 * sizeof(double));
 struct alignas(128) SetShard {
   std::vector<EntryAcc> entries;
   std::vector<FaceAcc> faces;
@@ -166,6 +168,17 @@ struct alignas(128) SetShard {
     double power[3];
   };
   std::vector<Send> sends;
+
+  void sum_over_ranks() {
+    Ranks::sum(&entries.data()->used, entries.size());
+    Ranks::sum(&faces.data()->phi_gain[0], faces.size() * 9);
+    Ranks::sum(absorbed.data(), absorbed.size());
+    Ranks::sum(escaped.data(), escaped.size());
+    uint64_t counts[2] = {lines, hits};
+    Ranks::sum(counts, 2);
+    lines = counts[0];
+    hits = counts[1];
+  }
 };
 
 struct PassContext {
@@ -323,6 +336,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     a.faces.assign(faces, FaceAcc{});
     const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
     a.allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
+    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     stream_pass_lines(
         store, x, parts, lo, hi, pass, progress,
         [&](const linestore::DecodedChunk& chunk, uint64_t c) { check_chunk(box, chunk, x, c); },
@@ -332,6 +346,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
           (ch == 1 ? transport_set_line<1> : transport_set_line<3>)(in, ev, m, a);
         });
   });
+  sum_shards_over_ranks(acc);
   // Merge in shard order: the quota sent; what was gathered and not sent
   // goes to the pools of the classes this box carries, what waits for the
   // boxes above to theirs.
@@ -444,7 +459,7 @@ PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const 
   for (int d = h.max_depth(); d >= 0; --d) {
     const std::vector<int>& boxes = at_depth[d];
     std::vector<SetResult> results(boxes.size());
-    tbb::parallel_for(size_t{0}, boxes.size(), [&](size_t k) {
+    for_each_box(boxes.size(), [&](size_t k) {
       results[k] = set_pass(store, sets, boxes[k], state, flight, shards_wanted, rotation, progress);
     });
     for (size_t k = 0; k < boxes.size(); ++k) {

@@ -26,6 +26,7 @@ struct SolveTimings {
 struct SolveRecord {
   std::string command_line;
   int threads = 1;
+  int ranks = 1;  // MPI ranks that shared the passes
   SolveTimings timings;
   FirstShotStats shot;
   bool resumed = false;

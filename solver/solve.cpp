@@ -22,6 +22,7 @@
 #include "accelerated_shot.h"
 #include "box_store.h"
 #include "hierarchical.h"
+#include "ranks.h"
 #include "report.h"
 
 namespace mpath {
@@ -197,9 +198,12 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   SolveRecord record;
   record.command_line = flags.command_line;
   record.threads = effective_threads(options);
+  record.ranks = Ranks::size();
+  if (!Ranks::root()) spdlog::set_level(spdlog::level::err);  // rank 0 logs and warns for all
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(record.threads));
-  spdlog::info("mpath-solve {} ({}), method {}, {} thread(s)", MPATH_VERSION, MPATH_GIT_COMMIT,
-               to_string(options.solver.method), record.threads);
+  spdlog::info("mpath-solve {} ({}), method {}, {} thread(s){}", MPATH_VERSION, MPATH_GIT_COMMIT,
+               to_string(options.solver.method), record.threads,
+               record.ranks > 1 ? fmt::format(" on each of {} MPI ranks", record.ranks) : "");
 
   const PreparedScene prepared = prepare_scene(options);
   const PatchMesh& mesh = prepared.mesh;
@@ -214,10 +218,14 @@ void run_solve(const Options& options, const SolveFlags& flags) {
     spdlog::info("dry run: config, scene{} are valid; nothing solved", store ? " and store" : "");
     return;
   }
-  create_folder(options.output.dir, "output.dir");
-  const DirectoryLock output_lock(options.output.dir, kLockFile, DirectoryLock::Role::writer, "output.dir",
-                                  "two solves would overwrite each other's results and checkpoint; give this run "
-                                  "another output.dir, or wait");
+  // Rank 0 writes the results (ranks.h); the others hold the same state.
+  std::optional<DirectoryLock> output_lock;
+  if (Ranks::root()) {
+    create_folder(options.output.dir, "output.dir");
+    output_lock.emplace(options.output.dir, kLockFile, DirectoryLock::Role::writer, "output.dir",
+                        "two solves would overwrite each other's results and checkpoint; give this run "
+                        "another output.dir, or wait");
+  }
 
   const auto bvh_start = clock::now();
   const Tracer tracer(mesh);
@@ -236,6 +244,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   start_state(options, flags, mesh, tracer, store.get(), checkpoint, lights, state, record);
   run_iterations(options, mesh, tracer, store.get(), checkpoint, state, record);
   log_remaining(options, mesh, store.get(), state, record.iterations, record.warnings);
+  if (!Ranks::root()) return;
   write_outputs(options, mesh, tracer, lights, state, record);
 
   record.timings.total = seconds_since(start);

@@ -28,6 +28,16 @@ void ShardAccumulator::reset(size_t face_count) {
   lines = hits = 0;
 }
 
+void ShardAccumulator::sum_over_ranks() {
+  Ranks::sum(&faces.data()->gathered[0], faces.size() * 8);
+  Ranks::sum(absorbed.data(), absorbed.size());
+  Ranks::sum(escaped.data(), escaped.size());
+  uint64_t counts[2] = {lines, hits};
+  Ranks::sum(counts, 2);
+  lines = counts[0];
+  hits = counts[1];
+}
+
 void receive(const RadiosityState& s, int face, const double* power, ShardAccumulator& acc) {
   const int ch = s.channels;
   if (face < 0) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "radiosity_state.h"
+#include "ranks.h"
 #include "line_order.h"
 #include "tracer.h"
 
@@ -38,7 +39,9 @@ struct alignas(64) FaceAccumulator {
   double gathered[3] = {0, 0, 0};  // received this pass, not yet re-sent
   double phi_gain[3] = {0, 0, 0};
   double quota_used = 0;           // fraction of the quota sent
+  double unused = 0;               // the cache line's rest: the whole is summed over ranks as 8 doubles
 };
+static_assert(sizeof(FaceAccumulator) == 8 * sizeof(double));
 
 // A shard's private accumulators, merged into the state after the pass.
 // Aligned to two cache lines (an adjacent-line prefetch pair) so that shards
@@ -59,7 +62,17 @@ struct alignas(128) ShardAccumulator {
   std::vector<Send> sends;
 
   void reset(size_t face_count);
+  // Sums the accumulators over the MPI ranks (ranks.h).
+  void sum_over_ranks();
 };
+
+// Sums each shard's accumulators over the MPI ranks, where there are several:
+// after it every rank holds what all of them made, shard by shard.
+template <typename Shard>
+void sum_shards_over_ranks(std::vector<Shard>& shards) {
+  if (Ranks::size() > 1)
+    for (Shard& s : shards) s.sum_over_ranks();
+}
 
 // What face `input` / `a` sends along one crossing: its share of its quota
 // (never more in all than `allowance` of it) plus what it gathered earlier

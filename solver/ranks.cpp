@@ -1,0 +1,89 @@
+#include "ranks.h"
+
+#include <algorithm>
+#include <cstdlib>
+#include <vector>
+
+#ifdef MPATH_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace mpath {
+
+int Ranks::rank_ = 0;
+int Ranks::size_ = 1;
+bool Ranks::mpi_ = false;
+
+namespace {
+
+// A launcher (mpirun, srun with PMI or PMIx) started this process.
+bool launched() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
+    if (std::getenv(v)) return true;
+  return false;
+}
+
+}  // namespace
+
+bool Ranks::built_with_mpi() {
+#ifdef MPATH_HAVE_MPI
+  return true;
+#else
+  return false;
+#endif
+}
+
+void Ranks::start(int* argc, char*** argv) {
+#ifdef MPATH_HAVE_MPI
+  if (!launched()) return;
+  int provided = 0;
+  // Only the thread that called main calls MPI; the passes' threads never do.
+  MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
+  mpi_ = true;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+#else
+  (void)argc;
+  (void)argv;
+#endif
+}
+
+void Ranks::finish(int status) {
+#ifdef MPATH_HAVE_MPI
+  if (!mpi_) return;
+  if (status != 0 && size_ > 1) MPI_Abort(MPI_COMM_WORLD, status);  // the others may wait in a sum
+  MPI_Finalize();
+  mpi_ = false;
+#else
+  (void)status;
+#endif
+}
+
+void Ranks::sum(double* data, size_t count) {
+#ifdef MPATH_HAVE_MPI
+  if (size_ <= 1) return;
+  // In pieces an int can count.
+  constexpr size_t kPiece = size_t{1} << 28;
+  for (size_t at = 0; at < count; at += kPiece)
+    MPI_Allreduce(MPI_IN_PLACE, data + at, static_cast<int>(std::min(kPiece, count - at)), MPI_DOUBLE, MPI_SUM,
+                  MPI_COMM_WORLD);
+#else
+  (void)data;
+  (void)count;
+#endif
+}
+
+void Ranks::sum(uint64_t* data, size_t count) {
+#ifdef MPATH_HAVE_MPI
+  if (size_ <= 1) return;
+  constexpr size_t kPiece = size_t{1} << 28;
+  for (size_t at = 0; at < count; at += kPiece)
+    MPI_Allreduce(MPI_IN_PLACE, data + at, static_cast<int>(std::min(kPiece, count - at)), MPI_UINT64_T, MPI_SUM,
+                  MPI_COMM_WORLD);
+#else
+  (void)data;
+  (void)count;
+#endif
+}
+
+}  // namespace mpath
