@@ -11,6 +11,7 @@
 
 #include "error.h"
 #include "hash.h"
+#include "ranks.h"
 #include "progress.h"
 #include "store_identity.h"
 
@@ -265,9 +266,18 @@ void BoxStore::verify_files(const fs::path& dir, const fs::path& manifest_path) 
   }
   // The whole store is read once and hashed, in parallel, before any work:
   // damage or a file of another store of the same size is found now, not in
-  // the middle of an iteration.
+  // the middle of an iteration. MPI ranks share the files (rank r the files
+  // r, r + ranks, ...), so a shared file system serves the store once; a
+  // rank that finds damage ends them all (ranks.h).
+  const auto mine = [](size_t i) { return static_cast<int>(i % static_cast<size_t>(Ranks::size())) == Ranks::rank(); };
+  if (Ranks::size() > 1) {
+    bytes = 0;
+    for (size_t i = 0; i < manifest_.files.size(); ++i)
+      if (mine(i)) bytes += manifest_.files[i].bytes;
+  }
   Progress progress("checking store", bytes, "bytes", true);
   tbb::parallel_for(size_t{0}, manifest_.files.size(), [&](size_t i) {
+    if (!mine(i)) return;
     const linestore::StoreFile& f = manifest_.files[i];
     const fs::path path = dir / f.name;
     if (hash_file(path) != f.hash)

@@ -4,11 +4,13 @@ outlives its time. On ROOM, for the hierarchical, multipath and classic
 methods, 2 ranks give the same solution.ply bytes as 1 rank (every rank
 merges the same shard accumulators, ranks.h) and report.json records the
 ranks; a run stopped on 2 ranks resumes on 1; a damaged store ends every
-rank with exit 1 and the file's name, and no rank is left waiting.
+rank with exit 1 and the file's name, and no rank is left waiting, also when
+only one rank finds it (ranks share the store's hashing).
 
 Usage: mpi_test.py BIN_DIR SOURCE_DIR MPIEXEC"""
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -81,7 +83,23 @@ def main():
                 code, out = solve(1, common + ["output.dir=" + resumed, "--resume"])
                 check(code == 0 and read(os.path.join(resumed, "solution.ply")) == read(os.path.join(outs[1], "solution.ply")),
                       "a run stopped on 2 ranks resumes on 1 to the same bytes: " + out[-500:])
-                # A damaged store: every rank ends, exit 1, the file named.
+                # Damage only rank 1 finds (it hashes the manifest's files 1, 3, ...):
+                # every rank ends, exit 1, the file named.
+                store = common[1].split("=", 1)[1]
+                copy = os.path.join(d, "store-copy")
+                shutil.copytree(store, copy)
+                files = json.load(open(os.path.join(copy, "manifest.json")))["files"]
+                name = files[1]["name"]
+                with open(os.path.join(copy, name), "r+b") as f:
+                    f.seek(os.path.getsize(os.path.join(copy, name)) // 2)
+                    byte = f.read(1)
+                    f.seek(-1, 1)
+                    f.write(bytes([byte[0] ^ 0x55]))
+                code, out = solve(2, ["solver.method=hierarchical", "store.dir=" + copy,
+                                      "output.dir=" + os.path.join(d, "hash")])
+                check(code == 1 and name in out and "do not match the hash" in out,
+                      "damage one rank finds ends both, exit 1 (got %d): %s" % (code, out[-800:]))
+                # A truncated file: every rank ends, exit 1, the file named.
                 box = sorted(f for f in os.listdir(common[1].split("=", 1)[1]) if f.endswith(".lines"))[-1]
                 path = os.path.join(common[1].split("=", 1)[1], box)
                 os.truncate(path, os.path.getsize(path) // 2)
