@@ -66,10 +66,10 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
   const double total_power = faces_power + lights_power;
   const auto share = [&](double power) {  // nothing emits at all (lights at multiplier 0): no lines
     return total_power > 0
-               ? static_cast<long long>(std::llround(static_cast<double>(options.first_shot.lines) * power / total_power))
+               ? static_cast<long long>(std::llround(static_cast<double>(first_shot_lines(options)) * power / total_power))
                : 0LL;
   };
-  record.shot = first_shot(mesh, tracer, state, lights.empty() ? options.first_shot.lines : share(faces_power),
+  record.shot = first_shot(mesh, tracer, state, lights.empty() ? first_shot_lines(options) : share(faces_power),
                            options.lines.seed, options.solver.shards, emitter_crossings(options, std::move(crossings)),
                            accelerated.get());
   for (size_t l = 0; l < lights.size(); ++l) {

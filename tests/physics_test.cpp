@@ -81,7 +81,7 @@ TEST(Furnace, WithLocalLineFirstShotStaysUnbiased) {
   for (const Patch& p : s.mesh.patches) total_area += p.area;
   double local_noise = 0;
   for (size_t f = 0; f < s.state.faces; ++f) {
-    const double received = static_cast<double>(o.first_shot.lines) * s.mesh.face_area(static_cast<int>(f)) / total_area;
+    const double received = static_cast<double>(first_shot_lines(o)) * s.mesh.face_area(static_cast<int>(f)) / total_area;
     local_noise += std::sqrt(2.0 / std::numbers::pi) * rho / std::sqrt(received);
   }
   local_noise /= s.state.faces;

@@ -166,7 +166,7 @@ StoredSolve solve_stored(const Options& options, const std::function<void(const 
   std::unique_ptr<SubsceneNearest> accelerated;
   if (options.first_shot.accelerate && !store.line_sets())
     accelerated = std::make_unique<SubsceneNearest>(s.mesh, store);
-  first_shot(s.mesh, tracer, s.state, options.first_shot.lines, options.lines.seed, options.solver.shards,
+  first_shot(s.mesh, tracer, s.state, first_shot_lines(options), options.lines.seed, options.solver.shards,
              emitter_crossings(options, store.face_crossings(s.mesh.face_count())), accelerated.get());
   iterate(options, s.state, s.log, [&](unsigned pass) {
     const PassStats p = stored_iteration(options, s.mesh, tracer, store, s.state, s.log, pass, options.solver.shards);
@@ -193,7 +193,7 @@ Solved solve_classic_in_memory(const Scene& scene, const Options& options) {
   const Tracer tracer(s.mesh);
   s.state = make_state(scene, s.mesh);
   const std::vector<double> crossings_per_area = emitter_crossings(options, forecast_crossings(s.mesh, static_cast<double>(options.lines.total)));
-  first_shot(s.mesh, tracer, s.state, options.first_shot.lines, options.lines.seed, options.solver.shards,
+  first_shot(s.mesh, tracer, s.state, first_shot_lines(options), options.lines.seed, options.solver.shards,
              crossings_per_area);
   s.log = solve_classic(options, s.mesh, tracer, s.state, options.solver.shards);
   return s;

@@ -1,5 +1,6 @@
 #include "config.h"
 
+#include <algorithm>
 #include <toml++/toml.h>
 
 #include <functional>
@@ -131,6 +132,11 @@ std::string options_to_json(const Options& options) {
   std::ostringstream out;
   out << toml::json_formatter{options_table(options)};
   return out.str();
+}
+
+long long first_shot_lines(const Options& options) {
+  if (options.first_shot.lines > 0) return options.first_shot.lines;
+  return std::max<long long>(10'000, options.lines.total / 2);
 }
 
 int effective_threads(const Options& options) {

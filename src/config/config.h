@@ -66,7 +66,7 @@ struct Options {
   Lines lines;
 
   struct FirstShot {
-    long long lines = 1'000'000;
+    long long lines = 0;  // 0: half of lines.total (first_shot_lines)
     bool accelerate = false;
     // "auto": an emitter face that the first pass of global lines crosses more
     // often than it would get local lines is shot by the global lines;
@@ -118,6 +118,11 @@ std::string options_to_toml(const Options& options);
 
 // The effective configuration as JSON text (for report.json).
 std::string options_to_json(const Options& options);
+
+// Local lines of the first shot: first_shot.lines, or when it is 0 half of
+// lines.total (at least 10,000), so that the first shot's noise falls with
+// the line budget (docs/algorithm.md, "First shot").
+long long first_shot_lines(const Options& options);
 
 // Number of worker threads the options ask for.
 int effective_threads(const Options& options);

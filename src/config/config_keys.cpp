@@ -99,6 +99,12 @@ long long positive_at_most(long long v, long long most, const ValueSource& src) 
   return v;
 }
 
+// 0 (the key's automatic choice) up to `most`.
+long long zero_or_at_most(long long v, long long most, const ValueSource& src) {
+  if (v == 0) return 0;
+  return positive_at_most(v, most, src);
+}
+
 double in_range(double v, double lo, double hi, const ValueSource& src) {
   if (!(v >= lo && v <= hi)) bad_value(src, fmt::format("expected a value in [{}, {}], got {}", lo, hi, v));
   return v;
@@ -398,8 +404,8 @@ std::vector<ConfigKey> make_table() {
        GET(static_cast<int64_t>(o.lines.seed))},
       {"lines.sequence", "`\"halton\"` (randomised Halton) or `\"random\"` global lines; see algorithm.md",
        SET(o.lines.sequence = get_choice(n, s, "sequence", {"random", "halton"})), GET(o.lines.sequence)},
-      {"first_shot.lines", "local lines of the first shot, shared among emitting faces by power",
-       SET(o.first_shot.lines = positive_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.first_shot.lines))},
+      {"first_shot.lines", "local lines of the first shot, shared among emitting faces by power; 0: half of lines.total",
+       SET(o.first_shot.lines = zero_or_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.first_shot.lines))},
       {"first_shot.accelerate",
        "hierarchical method: local lines entering a subscene are tested against the AR's associated patches first "
        "(algorithm.md)",
