@@ -70,7 +70,7 @@ struct alignas(128) BoxShard {
 
   void sum_over_ranks() {
     faces.sum_over_ranks();
-    for (std::vector<double>* v : {&wall_out, &child_in, &wall_used, &child_used}) Ranks::sum(v->data(), v->size());
+    for (std::vector<double>* v : {&wall_out, &child_in, &wall_used, &child_used}) Ranks::sum_records(*v);
   }
 };
 

@@ -170,8 +170,8 @@ struct alignas(128) SetShard {
   std::vector<Send> sends;
 
   void sum_over_ranks() {
-    Ranks::sum(&entries.data()->used, entries.size());
-    Ranks::sum(&faces.data()->phi_gain[0], faces.size() * 9);
+    Ranks::sum_records(entries);
+    Ranks::sum_records(faces);
     Ranks::sum(absorbed.data(), absorbed.size());
     Ranks::sum(escaped.data(), escaped.size());
     uint64_t counts[2] = {lines, hits};

@@ -59,27 +59,37 @@ void Ranks::finish(int status) {
 #endif
 }
 
-void Ranks::sum(double* data, size_t count) {
 #ifdef MPATH_HAVE_MPI
-  if (size_ <= 1) return;
-  // In pieces an int can count.
+namespace {
+
+// Sums `count` values of `type` (8 bytes each) over the ranks, in place, in
+// pieces an int can count.
+void allreduce(void* data, size_t count, MPI_Datatype type) {
+  if (Ranks::size() <= 1) return;
   constexpr size_t kPiece = size_t{1} << 28;
   for (size_t at = 0; at < count; at += kPiece)
-    MPI_Allreduce(MPI_IN_PLACE, data + at, static_cast<int>(std::min(kPiece, count - at)), MPI_DOUBLE, MPI_SUM,
-                  MPI_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, static_cast<char*>(data) + at * 8, static_cast<int>(std::min(kPiece, count - at)), type,
+                  MPI_SUM, MPI_COMM_WORLD);
+}
+
+}  // namespace
+#endif
+
+void Ranks::sum(double* data, size_t count) { sum_raw(data, count); }
+
+void Ranks::sum_raw(void* doubles, size_t count) {
+#ifdef MPATH_HAVE_MPI
+  allreduce(doubles, count, MPI_DOUBLE);
 #else
-  (void)data;
+  (void)doubles;
   (void)count;
 #endif
 }
 
 void Ranks::sum(uint64_t* data, size_t count) {
 #ifdef MPATH_HAVE_MPI
-  if (size_ <= 1) return;
-  constexpr size_t kPiece = size_t{1} << 28;
-  for (size_t at = 0; at < count; at += kPiece)
-    MPI_Allreduce(MPI_IN_PLACE, data + at, static_cast<int>(std::min(kPiece, count - at)), MPI_UINT64_T, MPI_SUM,
-                  MPI_COMM_WORLD);
+  static_assert(sizeof(uint64_t) == 8 && sizeof(double) == 8);
+  allreduce(data, count, MPI_UINT64_T);
 #else
   (void)data;
   (void)count;

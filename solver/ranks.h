@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace mpath {
 
@@ -35,10 +36,17 @@ class Ranks {
   // Sums over the ranks, in place: `count` doubles or 64-bit counts.
   static void sum(double* data, size_t count);
   static void sum(uint64_t* data, size_t count);
+  // The same for a vector of records made of doubles alone (accumulators).
+  template <typename T>
+  static void sum_records(std::vector<T>& records) {
+    static_assert(sizeof(T) % sizeof(double) == 0, "records of doubles alone");
+    if (!records.empty()) sum_raw(records.data(), records.size() * (sizeof(T) / sizeof(double)));
+  }
   // Whether MPI was built in.
   static bool built_with_mpi();
 
  private:
+  static void sum_raw(void* doubles, size_t count);
   static int rank_, size_;
   static bool mpi_;
 };

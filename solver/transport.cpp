@@ -29,7 +29,7 @@ void ShardAccumulator::reset(size_t face_count) {
 }
 
 void ShardAccumulator::sum_over_ranks() {
-  Ranks::sum(&faces.data()->gathered[0], faces.size() * 8);
+  Ranks::sum_records(faces);
   Ranks::sum(absorbed.data(), absorbed.size());
   Ranks::sum(escaped.data(), escaped.size());
   uint64_t counts[2] = {lines, hits};
