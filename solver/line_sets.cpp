@@ -172,12 +172,7 @@ struct alignas(128) SetShard {
   void sum_over_ranks() {
     Ranks::sum_records(entries);
     Ranks::sum_records(faces);
-    Ranks::sum(absorbed.data(), absorbed.size());
-    Ranks::sum(escaped.data(), escaped.size());
-    uint64_t counts[2] = {lines, hits};
-    Ranks::sum(counts, 2);
-    lines = counts[0];
-    hits = counts[1];
+    sum_totals_over_ranks(absorbed, escaped, lines, hits);
   }
 };
 

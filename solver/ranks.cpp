@@ -1,6 +1,7 @@
 #include "ranks.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <vector>
 
@@ -45,6 +46,14 @@ void Ranks::start(int* argc, char*** argv) {
 #else
   (void)argc;
   (void)argv;
+  // Several processes of a build without MPI would each solve alone and
+  // write the same output.dir: refused, by name.
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+    if (const char* n = std::getenv(v); n && std::atoi(n) > 1) {
+      std::fprintf(stderr, "mpath-solve: error: started as %s MPI processes, but built without MPI (configure with "
+                   "OpenMPI installed, or -DMPATH_MPI=ON); run it as one process\n", n);
+      std::exit(1);
+    }
 #endif
 }
 

@@ -28,14 +28,19 @@ void ShardAccumulator::reset(size_t face_count) {
   lines = hits = 0;
 }
 
-void ShardAccumulator::sum_over_ranks() {
-  Ranks::sum_records(faces);
+void sum_totals_over_ranks(std::array<double, 3>& absorbed, std::array<double, 3>& escaped, uint64_t& lines,
+                           uint64_t& hits) {
   Ranks::sum(absorbed.data(), absorbed.size());
   Ranks::sum(escaped.data(), escaped.size());
   uint64_t counts[2] = {lines, hits};
   Ranks::sum(counts, 2);
   lines = counts[0];
   hits = counts[1];
+}
+
+void ShardAccumulator::sum_over_ranks() {
+  Ranks::sum_records(faces);
+  sum_totals_over_ranks(absorbed, escaped, lines, hits);
 }
 
 void receive(const RadiosityState& s, int face, const double* power, ShardAccumulator& acc) {

@@ -66,6 +66,10 @@ struct alignas(128) ShardAccumulator {
   void sum_over_ranks();
 };
 
+// Sums a shard's energy terms and line counts over the MPI ranks.
+void sum_totals_over_ranks(std::array<double, 3>& absorbed, std::array<double, 3>& escaped, uint64_t& lines,
+                           uint64_t& hits);
+
 // Sums each shard's accumulators over the MPI ranks, where there are several:
 // after it every rank holds what all of them made, shard by shard.
 template <typename Shard>

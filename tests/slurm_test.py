@@ -8,7 +8,7 @@ single-machine run byte for byte. Then a failed task is resubmitted alone
 and finishes the store, a solve job of 2 tasks runs 2 MPI ranks to the same
 bytes, and both scripts pass shellcheck.
 
-Usage: slurm_test.py BIN_DIR SOURCE_DIR"""
+Usage: slurm_test.py BIN_DIR SOURCE_DIR [mpi|no-mpi]"""
 import filecmp
 import json
 import os
@@ -24,6 +24,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import Checks  # noqa: E402
 
 BIN, SOURCE = os.path.abspath(sys.argv[1]), os.path.abspath(sys.argv[2])
+MPI = len(sys.argv) < 4 or sys.argv[3] == "mpi"  # mpath-solve built with MPI (not the sanitizer build)
 CLUSTER = os.path.join(SOURCE, "configs", "cluster")
 ROOM = os.path.join(SOURCE, "configs", "room.toml")
 check = Checks("slurm")
@@ -202,21 +203,22 @@ def main():
         else:
             check(False, "no solution after the resubmitted task")
 
-        # The solve on 2 MPI ranks (--ntasks=2: mpirun inside the job): the same bytes.
-        ranks_out = os.path.join(work, "ranks", "out")
-        env = ["--export=ALL,OMPI_ALLOW_RUN_AS_ROOT=1,OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1"]
-        ranks = cluster.sbatch(env + ["--ntasks=2", "--cpus-per-task=1", "--mem=2G", os.path.join(CLUSTER, "solve.sbatch"),
-                                      ROOM] + common + ["store.dir=" + store, "output.dir=" + ranks_out], logs)
-        cluster.wait_jobs()
-        text = read(os.path.join(logs, "mpath-solve-%s.log" % ranks))
-        check("2 rank(s)" in text and "error" not in text.lower(), "the 2-rank solve job: " + text[-800:])
-        if os.path.exists(os.path.join(ranks_out, "report.json")):
-            report = json.load(open(os.path.join(ranks_out, "report.json")))
-            check(report["mpath"]["ranks"] == 2, "the 2-rank job's report says %s rank(s)" % report["mpath"]["ranks"])
-            check(filecmp.cmp(os.path.join(ranks_out, "solution.ply"), os.path.join(work, "local", "out", "solution.ply"),
-                              shallow=False), "the 2-rank job's solution differs from one machine's")
-        else:
-            check(False, "the 2-rank solve job wrote no report")
+        if MPI:
+            # The solve on 2 MPI ranks (--ntasks=2: mpirun inside the job): the same bytes.
+            ranks_out = os.path.join(work, "ranks", "out")
+            env = ["--export=ALL,OMPI_ALLOW_RUN_AS_ROOT=1,OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1"]
+            ranks = cluster.sbatch(env + ["--ntasks=2", "--cpus-per-task=1", "--mem=2G", os.path.join(CLUSTER, "solve.sbatch"),
+                                          ROOM] + common + ["store.dir=" + store, "output.dir=" + ranks_out], logs)
+            cluster.wait_jobs()
+            text = read(os.path.join(logs, "mpath-solve-%s.log" % ranks))
+            check("2 rank(s)" in text and "error" not in text.lower(), "the 2-rank solve job: " + text[-800:])
+            if os.path.exists(os.path.join(ranks_out, "report.json")):
+                report = json.load(open(os.path.join(ranks_out, "report.json")))
+                check(report["mpath"]["ranks"] == 2, "the 2-rank job's report says %s rank(s)" % report["mpath"]["ranks"])
+                check(filecmp.cmp(os.path.join(ranks_out, "solution.ply"), os.path.join(work, "local", "out", "solution.ply"),
+                                  shallow=False), "the 2-rank job's solution differs from one machine's")
+            else:
+                check(False, "the 2-rank solve job wrote no report")
 
         # A task numbered outside the shards says so and fails.
         bad = cluster.sbatch(["--array=5", "--export=ALL,MPATH_SHARDS=4", "--cpus-per-task=1", "--mem=1G",
