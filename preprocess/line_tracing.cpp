@@ -48,7 +48,7 @@ BoxTally ChunkTracer::empty_tally() const {
 }
 
 void ChunkTracer::count_classes(const std::vector<linestore::Event>& events, linestore::BoxCounts& counts) const {
-  // The pair of crossings i and i + dir belongs to the smallest box holding
+  // The pair of crossing i and the next it sees towards dir (next_seen) belongs to the smallest box holding
   // both patches (off the line: the outside, the root's); a subscene's line
   // leaving it carries no pair. Counted on the side of patch i that faces
   // crossing i + dir, as the solver's face_towards picks it.
@@ -57,7 +57,7 @@ void ChunkTracer::count_classes(const std::vector<linestore::Event>& events, lin
   const auto common = [&](int x, int y) { return hierarchy_.common_box(x, y); };
   for (int i = 0; i < n; ++i)
     for (const int dir : {+1, -1}) {
-      const int j = i + dir;
+      const int j = next_seen(i, dir, n, [&](int x, int d) { return towards(events[x], d); });
       const int k = pair_class(owner_[events[i].id], j < 0 || j >= n ? -1 : owner_[events[j].id], box_index_ == 0,
                                depth, common);
       if (k < 0) continue;
@@ -143,10 +143,13 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
         counts.wall_open[record.exit_ar]++;
       } else {
         // Associated patches: what a line entering at either end meets first.
-        const Event& a = record.events.front();
-        const Event& b = record.events.back();
-        if (a.kind == Event::patch) met.push_back(linestore::associated_key(record.entry_ar, a.id));
-        if (b.kind == Event::patch) met.push_back(linestore::associated_key(record.exit_ar, b.id));
+        // (Invisible backs let it through to the next.)
+        const auto& ev = record.events;
+        const int m = static_cast<int>(ev.size());
+        const auto seen = [&](int x, int d) { return towards(ev[x], d); };
+        const int a = next_seen(-1, +1, m, seen), b = next_seen(m, -1, m, seen);
+        if (a < m && ev[a].kind == Event::patch) met.push_back(linestore::associated_key(record.entry_ar, ev[a].id));
+        if (b >= 0 && ev[b].kind == Event::patch) met.push_back(linestore::associated_key(record.exit_ar, ev[b].id));
       }
     }
   }

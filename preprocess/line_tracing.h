@@ -40,6 +40,12 @@ class ChunkTracer {
  private:
   // Transparent boxes: adds a line's pairs of consecutive crossings to the class counts.
   void count_classes(const std::vector<linestore::Event>& events, linestore::BoxCounts& counts) const;
+  // The face (or kBlackSide, kInvisibleSide) event `e` turns towards
+  // direction d; a child box is never invisible.
+  int towards(const linestore::Event& e, int d) const {
+    if (e.kind != linestore::Event::patch) return 0;
+    return mesh_.patch_faces[box_.patches[e.id]][(d > 0) == e.along ? 0 : 1];
+  }
 
   const PatchMesh& mesh_;
   const Hierarchy& hierarchy_;

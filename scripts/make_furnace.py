@@ -11,7 +11,15 @@ pictures hung 1 mm off a wall. Closed objects face out of themselves
 and never overlap (they may touch); the room faces in. Without --seed, the
 fixed layout of earlier versions (three blocks).
 
-usage: make_furnace.py RHO OUT_STEM [--seed N] [--items K]
+With --veils V, V one-sided free-standing sheets ("veil") stand in the room,
+facing random ways. With --mgf the furnace is written as MGF as well
+(OUT_STEM.mgf, the same layout): every surface but the two-sided panels is
+one-sided (`sides 1`), so each veil's back and the inside of every object
+are invisible, as the MGF specification says, and the furnace stays exact.
+In the OBJ file the same backs are black (they absorb), so there the veils
+darken the room.
+
+usage: make_furnace.py RHO OUT_STEM [--seed N] [--items K] [--veils V] [--mgf]
 """
 import argparse
 import os
@@ -176,7 +184,31 @@ def panels(lay, n):
     return True
 
 
-def random_layout(seed, items):
+def veils(lay, count):
+    """One-sided sheets 0.6 x 0.8 m standing free in the room, facing along +-x or +-y."""
+    r = lay.rng
+    W, D, H = lay.size
+    n = 0
+    for attempt in range(400):
+        if n >= count:
+            break
+        along_x = r.random() < 0.5
+        flip = r.random() < 0.5
+        x, y, z = r.uniform(0.2, W - 0.8), r.uniform(0.2, D - 0.8), r.uniform(0.1, H - 1.0)
+        if along_x:  # in a plane y = const, 0.6 wide along x
+            room = ((x, y - 0.01, z), (x + 0.6, y + 0.01, z + 0.8))
+            q = ((x, y, z), (x + 0.6, y, z), (x + 0.6, y, z + 0.8), (x, y, z + 0.8))
+        else:
+            room = ((x - 0.01, y, z), (x + 0.01, y + 0.6, z + 0.8))
+            q = ((x, y, z), (x, y, z + 0.8), (x, y + 0.6, z + 0.8), (x, y + 0.6, z))
+        if not lay.free(*room):
+            continue
+        lay.objects[f"veil{n}"] = ("veil", [q[::-1] if flip else q])
+        lay.taken.append(room)
+        n += 1
+
+
+def random_layout(seed, items, veil_count=0):
     rng = random.Random(seed)
     size = (rng.uniform(3.5, 6.0), rng.uniform(3.0, 5.0), rng.uniform(2.4, 3.0))
     lay = Layout(rng, size)
@@ -193,6 +225,7 @@ def random_layout(seed, items):
               shelf(lay, n) if kind == "shelf" else panels(lay, n) if kind == "panels" else block(lay, n, kind))
         if ok:
             n += 1
+    veils(lay, veil_count)
     return lay.objects
 
 
@@ -208,10 +241,13 @@ def fixed_layout():
 def write(objects, rho, stem):
     name = stem.split("/")[-1]
     with open(stem + ".mtl", "w") as f:
-        for m in ("grey", "panel"):
+        for m in ("grey", "panel", "veil"):
             f.write(f"newmtl {m}\nKd {rho} {rho} {rho}\nKe 1 1 1\n")
     with open(stem + ".obj", "w") as f:
-        f.write(f"# furnace, rho {rho}: B = pi / (1 - rho) everywhere; material 'panel' is two-sided\n")
+        if any(material == "veil" for material, _ in objects.values()):
+            f.write(f"# furnace, rho {rho}, with one-sided sheets whose black backs absorb: not exact\n")
+        else:
+            f.write(f"# furnace, rho {rho}: B = pi / (1 - rho) everywhere; material 'panel' is two-sided\n")
         f.write(f"mtllib {name}.mtl\n")
         n = 0
         for obj, (material, quads) in objects.items():
@@ -223,14 +259,36 @@ def write(objects, rho, stem):
                 n += 4
 
 
+def write_mgf(objects, rho, stem):
+    """The same furnace as MGF: radiance 1 W/sr/m2 is pi * 179 lm/m2 of white."""
+    with open(stem + ".mgf", "w") as f:
+        f.write(f"# furnace, rho {rho}: B = pi / (1 - rho) everywhere; only 'panel' is two-sided\n")
+        for m, sides in (("grey", 1), ("panel", 2), ("veil", 1)):
+            f.write(f"m {m} =\n\tc\n\trd {rho}\n\ted {3.141592653589793 * 179:.9g}\n\tsides {sides}\n")
+        n = 0
+        for obj, (material, quads) in objects.items():
+            f.write(f"o {obj}\nm {material}\n")
+            for q in quads:
+                for p in q:
+                    f.write("v v%d =\n\tp %.9g %.9g %.9g\n" % ((n,) + tuple(p)))
+                    n += 1
+                f.write("f v%d v%d v%d v%d\n" % (n - 4, n - 3, n - 2, n - 1))
+            f.write("o\n")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("rho", type=float)
     ap.add_argument("stem")
     ap.add_argument("--seed", type=int, help="a random furnished layout (the same for the same seed)")
     ap.add_argument("--items", type=int, default=8, help="pieces of furniture in a random layout")
+    ap.add_argument("--veils", type=int, default=0, help="one-sided free-standing sheets in a random layout")
+    ap.add_argument("--mgf", action="store_true", help="write OUT_STEM.mgf too")
     a = ap.parse_args()
-    write(fixed_layout() if a.seed is None else random_layout(a.seed, a.items), a.rho, a.stem)
+    objects = fixed_layout() if a.seed is None else random_layout(a.seed, a.items, a.veils)
+    write(objects, a.rho, a.stem)
+    if a.mgf:
+        write_mgf(objects, a.rho, a.stem)
 
 
 if __name__ == "__main__":

@@ -229,10 +229,13 @@ void BoxStore::lay_out_boxes(const PatchMesh& mesh) {
     box.ar_base = ar_total_;
     ar_total_ += sb.ar_count();
     for (uint32_t p : sb.patches) {
-      std::array<int, 2> local{-1, -1};
+      std::array<int, 2> local{kBlackSide, kBlackSide};
       for (int side = 0; side < 2; ++side) {
         const int face = mesh.patch_faces[p][side];
-        if (face < 0) continue;
+        if (face < 0) {
+          local[side] = face;  // black or invisible
+          continue;
+        }
         local[side] = static_cast<int>(box.face_global.size());
         box.face_global.push_back(face);
       }

@@ -253,6 +253,7 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
       if (e.kind == Event::patch) {
         // The face turned towards the power: the back when it travels along the line.
         const int face = face_towards(*in.box, e, -s.dir);
+        if (face == kInvisibleSide) continue;  // passes it from behind
         if (face < 0) {
           for (int c = 0; c < ch; ++c) acc.absorbed[c] += p[c];
           break;

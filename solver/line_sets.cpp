@@ -6,6 +6,7 @@
 #include <chrono>
 
 #include "error.h"
+#include "line_order.h"
 #include "progress.h"
 
 namespace mpath {
@@ -164,7 +165,7 @@ struct alignas(128) SetShard {
   std::array<double, 3> absorbed{}, escaped{};
   uint64_t lines = 0, hits = 0;
   struct Send {
-    int from, dir;
+    int to, dir;  // the crossing it reaches (-1 or n: off the line), and its way
     double power[3];
   };
   std::vector<Send> sends;
@@ -197,14 +198,16 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
   const LineSets& sets = *in.sets;
   auto& sends = shard.sends;
   sends.clear();
+  const auto towards = [&](int j, int d) { return face_towards(box, ev[j], d); };
   for (int i = 0; i < n; ++i)
     for (const int dir : {+1, -1}) {
       const int face = face_towards(box, ev[i], dir);
       if (face < 0) continue;
       const FaceIn& from = in.faces[face];
+      const int j = next_seen(i, dir, n, towards);
       // A face of the box's own (one class here) needs no look-up of its partner's box.
-      const int k = from.carried == 1 ? (in.root || (i + dir >= 0 && i + dir < n) ? 0 : -1)
-                                      : pair_class(sets, lines, in.root, ev, n, i, i + dir);
+      const int k = from.carried == 1 ? (in.root || (j >= 0 && j < n) ? 0 : -1)
+                                      : pair_class(sets, lines, in.root, ev, n, i, j);
       if (k < 0) continue;
       const uint32_t e = from.entry + static_cast<uint32_t>(k);
       const EntryInput& input = in.entries[e];
@@ -213,7 +216,7 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       double share = input.share;
       if (in.capped) share = std::max(0.0, std::min(share, input.expected * shard.allowance - acc.used));
       acc.used += share;
-      SetShard::Send s{i, dir, {0, 0, 0}};
+      SetShard::Send s{j, dir, {0, 0, 0}};
       bool any = false;
       for (int c = 0; c < ch; ++c) {
         s.power[c] = input.quota[c] * share + fa.gathered[c];
@@ -223,7 +226,7 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       if (any) sends.push_back(s);
     }
   for (const SetShard::Send& s : sends) {
-    const int j = s.from + s.dir;
+    const int j = s.to;
     if (j < 0 || j >= n) {  // off the line: only the root sends there, out of the scene
       for (int c = 0; c < ch; ++c) shard.escaped[c] += s.power[c];
       continue;

@@ -85,12 +85,18 @@ void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, Shar
     send_from(f.backward, static_cast<int>(i) - 1, false);
   }
   for (const Send& out : sends) {
-    if (out.to_hit < 0 || out.to_hit >= static_cast<int>(n)) {
+    // The first crossing on its way that does not let it through.
+    int face = kInvisibleSide;
+    int j = out.to_hit;
+    for (; j >= 0 && j < static_cast<int>(n); j += out.forward ? 1 : -1) {
+      const Facing f = facing(mesh, hits[j]);
+      face = out.forward ? f.backward : f.forward;
+      if (face != kInvisibleSide) break;
+    }
+    if (j < 0 || j >= static_cast<int>(n)) {
       for (int c = 0; c < ch; ++c) acc.escaped[c] += out.power[c];
       continue;
     }
-    const Facing f = facing(mesh, hits[out.to_hit]);
-    const int face = out.forward ? f.backward : f.forward;
     if (face < 0) {
       for (int c = 0; c < ch; ++c) acc.absorbed[c] += out.power[c];
       continue;

@@ -127,5 +127,55 @@ TEST(Transport, PowerLeavingTheEndsOfALineEscapes) {
   EXPECT_DOUBLE_EQ(acc.escaped[0], 3.0);
 }
 
+// A floor (faces +y, y = 0), a one-sided sheet with an invisible back above
+// it (faces +y, y = 1) and a ceiling (faces -y, y = 2).
+struct Veil {
+  Scene scene;
+  PatchMesh mesh;
+  Veil() {
+    const int m = test::add_material(scene, "m", 0.5, 0.0);
+    const int v = test::add_material(scene, "veil", 0.5, 0.0);
+    scene.materials[v].invisible_back = true;
+    const int o = test::add_object(scene, "o");
+    test::add_quad(scene, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, m, o);
+    test::add_quad(scene, {0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}, v, o);
+    test::add_quad(scene, {0, 2, 0}, {1, 2, 0}, {1, 2, 1}, {0, 2, 1}, m, o);
+    mesh = build_mesh(scene, 10.0);
+  }
+};
+
+TEST(Transport, PowerPassesAnInvisibleBackToTheNextSurface) {
+  const Veil v;
+  ASSERT_EQ(v.mesh.patch_faces[1][1], kInvisibleSide);
+  ASSERT_EQ(v.mesh.patch_faces[0][1], kBlackSide);
+  RadiosityState state = make_state(v.scene, v.mesh);
+  PassInputs in = PassInputs::start(state, v.mesh, std::vector<double>(state.faces, 1.0));
+  ShardAccumulator acc;
+  acc.reset(state.faces);
+  in.faces[0].quota[0] = 2.0;  // the floor sends 2 W up
+  in.faces[2].quota[0] = 4.0;  // the ceiling 4 W down
+  in.faces[1].quota[0] = 8.0;  // the sheet 8 W up, from its front
+  const std::vector<LineHit> up = crossings(v.mesh, {0, 1, 0}, {{0.0, 0}, {1.0, 1}, {2.0, 2}});
+  transport_line(in, up, acc);
+  // The floor's 2 W pass the sheet's back and reach the ceiling, as do the
+  // sheet's 8 W; the ceiling's 4 W stop at the sheet's front.
+  EXPECT_DOUBLE_EQ(acc.faces[2].phi_gain[0], 0.5 * 10.0);
+  EXPECT_DOUBLE_EQ(acc.faces[1].phi_gain[0], 0.5 * 4.0);
+  EXPECT_DOUBLE_EQ(acc.faces[0].phi_gain[0], 0.0);
+  EXPECT_DOUBLE_EQ(acc.absorbed[0], 0.5 * 14.0);
+  EXPECT_DOUBLE_EQ(acc.escaped[0], 0.0);
+
+  // Rays do the same: up from the floor the ceiling, down from the ceiling the sheet.
+  const Tracer tracer(v.mesh);
+  EXPECT_EQ(tracer.nearest({0.5, 0.5, 0.5}, {0, 1, 0}, 0.0, 10.0).patch, 2);
+  EXPECT_EQ(tracer.nearest({0.5, 1.5, 0.5}, {0, -1, 0}, 0.0, 10.0).patch, 1);
+  EXPECT_EQ(tracer.nearest_from(0, {0.5, 0.0, 0.5}, {0, 1, 0}, 10.0).patch, 2);
+  EXPECT_EQ(tracer.nearest_from(2, {0.5, 2.0, 0.5}, {0, -1, 0}, 10.0).patch, 1);
+  // Every crossing is reported along a line; transport lets the back pass.
+  std::vector<LineHit> all;
+  tracer.all_hits({0.5, -1, 0.5}, {0, 1, 0}, 10.0, all);
+  EXPECT_EQ(all.size(), 3u);
+}
+
 }  // namespace
 }  // namespace mpath

@@ -21,6 +21,17 @@ inline Facing facing(const PatchMesh& mesh, const LineHit& h) {
   return h.along ? Facing{f[0], f[1]} : Facing{f[1], f[0]};
 }
 
+// The crossing that power leaving crossing `i` in direction `dir` (+1 along
+// the line, -1 against it) reaches: the next one whose face turned towards
+// it, `towards(j, -dir)`, is not an invisible back; -1 or `n` when the power
+// leaves the line. Preprocessor and solver pair crossings by this one rule.
+template <typename Towards>
+inline int next_seen(int i, int dir, int n, const Towards& towards) {
+  int j = i + dir;
+  while (j >= 0 && j < n && towards(j, -dir) == kInvisibleSide) j += dir;
+  return j;
+}
+
 // Reorders crossings at equal distance (within epsilon) so that, where some
 // order allows, a live face is never paired with a black back side (objects
 // resting on surfaces, back-to-back walls, objects in corners).

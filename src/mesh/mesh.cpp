@@ -228,14 +228,18 @@ PatchMesh build_mesh(const Scene& scene, double max_patch_area) {
 
   // Faces: all fronts, then the backs of two-sided patches.
   const int patches = static_cast<int>(mesh.patches.size());
-  mesh.patch_faces.assign(patches, {-1, -1});
+  mesh.patch_faces.assign(patches, {kBlackSide, kBlackSide});
   for (int i = 0; i < patches; ++i) {
     mesh.patch_faces[i][0] = i;
     mesh.face_patch.push_back(i);
     mesh.face_side.push_back(0);
   }
   for (int i = 0; i < patches; ++i) {
-    if (!scene.materials[mesh.patches[i].material].two_sided) continue;
+    const Material& m = scene.materials[mesh.patches[i].material];
+    if (!m.two_sided) {
+      if (m.invisible_back) mesh.patch_faces[i][1] = kInvisibleSide;
+      continue;
+    }
     mesh.patch_faces[i][1] = static_cast<int>(mesh.face_patch.size());
     mesh.face_patch.push_back(i);
     mesh.face_side.push_back(1);

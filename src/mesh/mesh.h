@@ -23,11 +23,18 @@ struct Patch {
   bool is_triangle() const { return v[3] == v[2]; }
 };
 
+// The back side of a one-sided patch, where patch_faces holds no face: black
+// (it absorbs what reaches it) or invisible (power passes it, unchanged, to
+// the next surface along its way; docs/scene-formats.md, "Sides").
+inline constexpr int kBlackSide = -1;
+inline constexpr int kInvisibleSide = -2;
+
 struct PatchMesh {
   std::vector<Vec3> vertices;
   std::vector<Patch> patches;
-  // Per patch: front and back face, -1 for a black back (kept apart from
-  // Patch so the hot transport loop reads 8 bytes a crossing).
+  // Per patch: front and back face, kBlackSide for a black back and
+  // kInvisibleSide for an invisible one (kept apart from Patch so the hot
+  // transport loop reads 8 bytes a crossing).
   std::vector<std::array<int, 2>> patch_faces;
   std::vector<int> face_patch;     // face -> patch
   std::vector<uint8_t> face_side;  // face -> 0 front, 1 back
@@ -43,7 +50,7 @@ struct PatchMesh {
   }
   double face_area(int face) const { return patches[face_patch[face]].area; }
   // The side of `patch` a line along `dir` meets (0 front, 1 back), and its
-  // face there (-1: the black back of a one-sided patch).
+  // face there (negative: the black or invisible back of a one-sided patch).
   int side_met(int patch, const Vec3& dir) const { return dot(patches[patch].normal, dir) < 0 ? 0 : 1; }
   int face_met(int patch, const Vec3& dir) const { return patch_faces[patch][side_met(patch, dir)]; }
 };

@@ -446,6 +446,7 @@ class MgfReader {
       }
     }
     mat.two_sided = m.sides == 2;
+    mat.invisible_back = !mat.two_sided;  // the specification: a one-sided surface is invisible from behind
     if (m.rd < 0 || m.rd > 1) fail(fmt::format("material '{}': reflectance rd {} is outside [0, 1]", mat.name, m.rd));
     if (m.rd == 1) ones_.insert(mat.name);
     const auto key = std::make_tuple(mat.name, mat.rho, mat.emission, mat.two_sided);

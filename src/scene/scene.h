@@ -15,6 +15,9 @@ struct Material {
   Rgb rho{0.5, 0.5, 0.5};   // diffuse reflectance, each in [0, 1)
   Rgb emission{0, 0, 0};    // emitted radiance, W/sr/m2 (exitance is pi times this)
   bool two_sided = false;
+  // One-sided only: the back is invisible (what reaches it passes through, as
+  // the MGF specification says) rather than black (it absorbs what reaches it).
+  bool invisible_back = false;
 
   bool emits() const { return emission[0] > 0 || emission[1] > 0 || emission[2] > 0; }
 };

@@ -26,6 +26,28 @@ void collect_filter(const RTCFilterFunctionNArguments* args) {
   args->valid[0] = 0;  // reject, so traversal goes on to the next hit
 }
 
+// Whether a hit is on the invisible back of a one-sided patch: a ray passes it.
+bool passes(const RTCFilterFunctionNArguments* args, const Tracer& tracer, const PatchMesh& mesh, int prim) {
+  const int patch = tracer.global(prim);
+  if (mesh.patch_faces[patch][1] != kInvisibleSide) return false;
+  const Vec3 dir{RTCRayN_dir_x(args->ray, args->N, 0), RTCRayN_dir_y(args->ray, args->N, 0),
+                 RTCRayN_dir_z(args->ray, args->N, 0)};
+  return mesh.side_met(patch, dir) == 1;
+}
+
+// The intersect context of a nearest query in a scene with invisible backs.
+struct NearestContext {
+  RTCIntersectContext context;
+  const PatchMesh* mesh;
+  const Tracer* tracer;
+};
+
+void nearest_filter(const RTCFilterFunctionNArguments* args) {
+  auto* ctx = reinterpret_cast<NearestContext*>(args->context);
+  if (passes(args, *ctx->tracer, *ctx->mesh, static_cast<int>(RTCHitN_primID(args->hit, args->N, 0))))
+    args->valid[0] = 0;
+}
+
 void sort_by_distance(LineHit* hits, size_t n) {
   // Few hits per line: insertion sort beats std::sort here.
   for (size_t i = 1; i < n; ++i) {
@@ -54,7 +76,7 @@ void leave_filter(const RTCFilterFunctionNArguments* args) {
   auto* ctx = reinterpret_cast<LeaveContext*>(args->context);
   const int prim = static_cast<int>(RTCHitN_primID(args->hit, args->N, 0));
   const float t = RTCRayN_tfar(args->ray, args->N, 0);
-  if (prim == ctx->from) {
+  if (prim == ctx->from || passes(args, *ctx->tracer, *ctx->mesh, prim)) {
     args->valid[0] = 0;
     return;
   }
@@ -106,6 +128,7 @@ Tracer::Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset, bool 
   for (size_t i = 0; i < traced; ++i) {
     const Patch& p = mesh.patches[global(static_cast<int>(i))];
     planes_.push_back({p.normal, dot(p.normal, mesh.vertices[p.v[0]])});
+    any_invisible_ |= mesh.patch_faces[global(static_cast<int>(i))][1] == kInvisibleSide;
   }
   device_ = rtcNewDevice("verbose=0");
   MPATH_CHECK(device_ != nullptr, "rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));
@@ -148,11 +171,14 @@ std::string Tracer::embree_version() {
 }
 
 NearestHit Tracer::nearest(const Vec3& org, const Vec3& dir, double tnear, double tfar) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+  NearestContext ctx;
+  rtcInitIntersectContext(&ctx.context);
+  if (any_invisible_) ctx.context.filter = nearest_filter;
+  ctx.mesh = &mesh_;
+  ctx.tracer = this;
   RTCRayHit rh;
   init_ray(rh, org, dir, tnear, tfar);
-  rtcIntersect1(scene_, &context, &rh);
+  rtcIntersect1(scene_, &ctx.context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {};
   const int local = static_cast<int>(rh.hit.primID);
   return {global(local), plane_distance(local, org, dir, rh.ray.tfar)};

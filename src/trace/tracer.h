@@ -28,6 +28,8 @@ class Tracer {
   Tracer(const Tracer&) = delete;
   Tracer& operator=(const Tracer&) = delete;
 
+  // Nearest and nearest_from pass the invisible backs of one-sided patches
+  // (kInvisibleSide); all_hits reports them (the transports let power pass).
   NearestHit nearest(const Vec3& org, const Vec3& dir, double tnear, double tfar) const;
 
   // Nearest hit of a line leaving patch `from` at `org` (on the patch). Sees
@@ -69,6 +71,7 @@ class Tracer {
   double tie_epsilon_ = 0;
   double hair_ = 0;      // a tiny fraction of the scene size
   double near_tie_ = 0;  // hits closer than this get distances in double precision
+  bool any_invisible_ = false;  // some traced patch has an invisible back: nearest() passes it
 };
 
 }  // namespace mpath
