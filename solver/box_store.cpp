@@ -269,10 +269,11 @@ void BoxStore::verify_files(const fs::path& dir, const fs::path& manifest_path) 
   }
   // The whole store is read once and hashed, in parallel, before any work:
   // damage or a file of another store of the same size is found now, not in
-  // the middle of an iteration. MPI ranks share the files (rank r the files
-  // r, r + ranks, ...), so a shared file system serves the store once; a
-  // rank that finds damage ends them all (ranks.h).
-  const auto mine = [](size_t i) { return static_cast<int>(i % static_cast<size_t>(Ranks::size())) == Ranks::rank(); };
+  // the middle of an iteration. MPI ranks share the files as they share a
+  // pass's shards (Ranks::owns: a contiguous run each), so a shared file
+  // system serves the store once; a rank that finds damage ends them all.
+  const int file_count = static_cast<int>(manifest_.files.size());
+  const auto mine = [&](size_t i) { return Ranks::owns(static_cast<int>(i), file_count); };
   if (Ranks::size() > 1) {
     bytes = 0;
     for (size_t i = 0; i < manifest_.files.size(); ++i)

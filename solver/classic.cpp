@@ -44,12 +44,14 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
 
   std::vector<ShardAccumulator> acc(shards);
   Progress progress(fmt::format("pass {}", pass), lines, "lines", true);
-  tbb::parallel_for(0, shards, [&](int s) {
-    const uint64_t lo = lines * s / shards, hi = lines * (s + 1) / shards;
+  const auto part = [&](int s) { return std::pair{lines * s / shards, lines * (s + 1) / shards}; };
+  run_shards(acc, [&](int s) {
+    const auto [lo, hi] = part(s);
+    acc[s].reset(state.faces);
+    acc[s].allowance = static_cast<double>(hi - lo) / static_cast<double>(lines);
+  }, [&](int s) {
+    const auto [lo, hi] = part(s);
     ShardAccumulator& a = acc[s];
-    a.reset(state.faces);
-    a.allowance = static_cast<double>(hi - lo) / static_cast<double>(lines);
-    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     Rng rng = make_rng(seed, kGlobalLineStream, (static_cast<unsigned long long>(pass) << 20) + s);
     std::vector<LineHit> hits;
     uint64_t since_report = 0;
@@ -68,7 +70,6 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
     progress.advance(since_report);
   });
   progress.finish();
-  sum_shards_over_ranks(acc);
   return finish_pass(in, acc, state, pass, start);
 }
 

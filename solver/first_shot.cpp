@@ -1,7 +1,5 @@
 #include "first_shot.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -84,10 +82,8 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   std::vector<ShardAccumulator> acc(shards);
   Progress progress("first shot", total, "lines", true);
-  tbb::parallel_for(0, shards, [&](int s) {
+  run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
     ShardAccumulator& a = acc[s];
-    a.reset(state.faces);
-    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     Rng rng = make_rng(seed, kFirstShotStream, static_cast<unsigned long long>(s));
     const uint64_t lo = total * s / shards, hi = total * (s + 1) / shards;
     size_t e = std::upper_bound(first.begin(), first.end(), lo) - first.begin() - 1;
@@ -111,7 +107,6 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   progress.finish();
 
   // Merge in shard order: the result does not depend on scheduling.
-  sum_shards_over_ranks(acc);
   merge_received(acc, state);
   stats.lines = total;
   stats.emitter_faces = emitters.size();
@@ -133,10 +128,8 @@ uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState
   const uint64_t n = power > 0 ? static_cast<uint64_t>(std::max<long long>(lines, 1)) : 0;
   if (n == 0) return 0;
   std::vector<ShardAccumulator> acc(shards);
-  tbb::parallel_for(0, shards, [&](int s) {
+  run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
     ShardAccumulator& a = acc[s];
-    a.reset(state.faces);
-    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     Rng rng = make_rng(seed, kLightStream, static_cast<unsigned long long>(s));
     const double share[3] = {power / static_cast<double>(n), power / static_cast<double>(n), power / static_cast<double>(n)};
     for (uint64_t k = n * s / shards; k < n * (s + 1) / shards; ++k) {
@@ -150,7 +143,6 @@ uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState
       receive(state, mesh.face_met(hit.patch, dir), share, a);
     }
   });
-  sum_shards_over_ranks(acc);
   merge_received(acc, state);
   return n;
 }

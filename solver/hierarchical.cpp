@@ -290,14 +290,15 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shar
   const uint64_t pass_lines = part_lines(in.parts, 0, chunks);
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(shards_wanted, chunks)));
   std::vector<BoxShard> acc(shards);
-  for_each_shard(shards, [&](int s) {
+  run_shards(acc, [&](int s) {
     BoxShard& a = acc[s];
     a.faces.reset(in.faces.size());
     a.wall_out.assign(size_t{in.wall_ars} * ch, 0.0);
     a.child_in.assign(in.child.size() * ch, 0.0);
     a.wall_used.assign(in.wall.size(), 0.0);
     a.child_used.assign(in.child.size(), 0.0);
-    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
+  }, [&](int s) {
+    BoxShard& a = acc[s];
     // With every line, the exact crossing counts make the shares add up to
     // each quota; with a part of them, each shard may send its part only.
     const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
@@ -318,7 +319,6 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shar
   });
   // Merge in shard order: faces, the box's Out, the children's In, and what
   // no line took back where it was held.
-  sum_shards_over_ranks(acc);
   BoxResult result;
   for (size_t f = 0; f < in.faces.size(); ++f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
@@ -449,10 +449,8 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<i
   const int shards = std::max(1, std::min<int>(shards_wanted, static_cast<int>(faces.size())));
   std::vector<ShardAccumulator> acc(shards);
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
-  for_each_shard(shards, [&](int s) {
+  run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
     ShardAccumulator& a = acc[s];
-    a.reset(state.faces);
-    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
     for (size_t i = faces.size() * s / shards; i < faces.size() * (s + 1) / shards; ++i) {
       const int face = faces[i];
       Rng rng = make_rng(seed, kUncarriedStream, (static_cast<unsigned long long>(pass) << 32) + face);
@@ -465,7 +463,6 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<i
     }
   });
   // The shot power leaves its faces' unshot, then the hits are merged in shard order.
-  sum_shards_over_ranks(acc);
   for (int face : faces)
     for (int c = 0; c < ch; ++c) state.unshot[state.at(static_cast<size_t>(face), c)] = 0;
   merge_received(acc, state);

@@ -77,17 +77,6 @@ PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const 
 void chunk_line_order(unsigned pass, int box, uint64_t chunk, size_t n, std::vector<uint32_t>& order);
 
 // Of a chunk, the lines a pass takes (the first of chunk_line_order).
-// Runs f(0) .. f(shards - 1) on the threads, in a task context of its own:
-// when a sibling loop (another box of the same depth) fails, this one still
-// runs to its end instead of being cancelled half done, so that no caller
-// merges accumulators a cancelled shard never filled; the sibling's error
-// then reaches the caller of the outer loop.
-template <typename F>
-void for_each_shard(int shards, const F& f) {
-  tbb::task_group_context context(tbb::task_group_context::isolated);
-  tbb::parallel_for(0, shards, f, context);
-}
-
 // Runs f(0) .. f(boxes - 1), the passes of the boxes of one depth: side by
 // side on the threads with one MPI rank; one after another with several,
 // since every rank must sum the boxes' accumulators in the same order, from

@@ -328,13 +328,15 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(shards_wanted, chunks)));
   std::vector<SetShard> acc(shards);
-  for_each_shard(shards, [&](int s) {
+  run_shards(acc, [&](int s) {
     SetShard& a = acc[s];
     a.entries.assign(entries, EntryAcc{});
     a.faces.assign(faces, FaceAcc{});
     const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
     a.allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
-    if (!Ranks::owns(s, shards)) return;  // another MPI rank's
+  }, [&](int s) {
+    SetShard& a = acc[s];
+    const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
     stream_pass_lines(
         store, x, parts, lo, hi, pass, progress,
         [&](const linestore::DecodedChunk& chunk, uint64_t c) { check_chunk(box, chunk, x, c); },
@@ -344,7 +346,6 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
           (ch == 1 ? transport_set_line<1> : transport_set_line<3>)(in, ev, m, a);
         });
   });
-  sum_shards_over_ranks(acc);
   // Merge in shard order: the quota sent; what was gathered and not sent
   // goes to the pools of the classes this box carries, what waits for the
   // boxes above to theirs.

@@ -8,6 +8,9 @@
 #include <cstdint>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
+
 #include "radiosity_state.h"
 #include "ranks.h"
 #include "line_order.h"
@@ -76,6 +79,31 @@ template <typename Shard>
 void sum_shards_over_ranks(std::vector<Shard>& shards) {
   if (Ranks::size() > 1)
     for (Shard& s : shards) s.sum_over_ranks();
+}
+
+// Runs f(0) .. f(shards - 1) on the threads, in a task context of its own:
+// when a sibling loop (another box of the same depth) fails, this one still
+// runs to its end instead of being cancelled half done, so that no caller
+// merges accumulators a cancelled shard never filled; the sibling's error
+// then reaches the caller of the outer loop.
+template <typename F>
+void for_each_shard(int shards, const F& f) {
+  tbb::task_group_context context(tbb::task_group_context::isolated);
+  tbb::parallel_for(0, shards, f, context);
+}
+
+// Runs a pass's shards, one per accumulator in `acc`: reset(s) for every
+// shard, run(s) for this MPI rank's own (Ranks::owns), side by side on the
+// threads; then every shard's accumulators are summed over the ranks, so
+// that each rank merges exactly what one process would (ranks.h).
+template <typename Shard, typename Reset, typename Run>
+void run_shards(std::vector<Shard>& acc, const Reset& reset, const Run& run) {
+  const int shards = static_cast<int>(acc.size());
+  for_each_shard(shards, [&](int s) {
+    reset(s);
+    if (Ranks::owns(s, shards)) run(s);
+  });
+  sum_shards_over_ranks(acc);
 }
 
 // What face `input` / `a` sends along one crossing: its share of its quota
