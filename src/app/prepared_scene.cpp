@@ -13,6 +13,7 @@ PreparedScene prepare_scene(const Options& options) {
   PreparedScene out;
   auto t0 = clock::now();
   out.scene = load_scene(options.scene, options.mesh.curve_segments, out.warnings);
+  if (options.mesh.split_contacts) out.contacts = split_contacts(out.scene);
   auto t1 = clock::now();
   out.mesh = build_mesh(out.scene, options.mesh.max_patch_area);
   auto t2 = clock::now();
@@ -23,6 +24,12 @@ PreparedScene prepare_scene(const Options& options) {
   for (const auto& w : out.warnings) spdlog::warn("{}", w);
   spdlog::info("scene {}: {} polygons, {} objects, {} materials", options.scene.file.string(), out.scene.polygons.size(),
                out.scene.objects.size(), out.scene.materials.size());
+  if (out.contacts.pairs > 0)
+    spdlog::info("contacts: {} pairs of polygons touching; {} polygons split into {} (mesh.split_contacts)",
+                 out.contacts.pairs, out.contacts.split, out.contacts.pieces);
+  if (out.contacts.skipped > 0)
+    spdlog::warn("contacts: {} pair(s) of coplanar polygons facing each other left whole: one is not convex",
+                 out.contacts.skipped);
   spdlog::info("mesh: {} patches, {} faces, max patch area {:.4g}{}", out.mesh.patches.size(), out.mesh.face_count(),
                out.mesh.max_patch_area, options.mesh.max_patch_area > 0 ? "" : " (automatic)");
   return out;

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "config.h"
+#include "contact.h"
 #include "mesh.h"
 #include "scene.h"
 
@@ -14,6 +15,7 @@ struct PreparedScene {
   Scene scene;
   PatchMesh mesh;
   std::vector<std::string> warnings;
+  ContactSplit contacts;  // polygons split where they touch another (mesh.split_contacts)
   double load_seconds = 0;
   double mesh_seconds = 0;
 };

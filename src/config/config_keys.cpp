@@ -366,6 +366,10 @@ std::vector<ConfigKey> make_table() {
        SET(o.mesh.curve_segments = static_cast<int>(get_integer(n, s));
            if (o.mesh.curve_segments < 3 || o.mesh.curve_segments > 1024) bad_value(s, "expected an integer in [3, 1024]")),
        GET(o.mesh.curve_segments)},
+      {"mesh.split_contacts",
+       "split polygons pressed against another (a frame on a wall) into their part in contact and the rest, so that "
+       "no patch mixes the two (see scene-formats.md)",
+       SET(o.mesh.split_contacts = get_bool(n, s)), GET(o.mesh.split_contacts)},
       {"hierarchy.group_threshold", "two items group when (sum of their box areas) / (area of the merged box) exceeds this",
        SET(o.hierarchy.group_threshold = in_range(get_number(n, s), 0.0, 1e9, s)), GET(o.hierarchy.group_threshold)},
       {"hierarchy.vp_area_ratio",

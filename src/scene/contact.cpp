@@ -1,0 +1,233 @@
+#include "contact.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace mpath {
+namespace {
+
+struct P2 {
+  double u, v;
+};
+using Poly2 = std::vector<P2>;
+
+double cross2(const P2& a, const P2& b, const P2& c) { return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u); }
+
+double signed_area(const Poly2& p) {
+  double s = 0;
+  for (size_t i = 0, j = p.size() - 1; i < p.size(); j = i++) s += p[j].u * p[i].v - p[i].u * p[j].v;
+  return 0.5 * s;
+}
+
+double perimeter(const Poly2& p) {
+  double s = 0;
+  for (size_t i = 0, j = p.size() - 1; i < p.size(); j = i++) s += std::hypot(p[i].u - p[j].u, p[i].v - p[j].v);
+  return s;
+}
+
+// The part of convex `x` where side * cross(a, b, p) >= 0 (Sutherland-Hodgman, one edge).
+Poly2 clip(const Poly2& x, const P2& a, const P2& b, double side) {
+  Poly2 out;
+  const size_t n = x.size();
+  for (size_t i = 0; i < n; ++i) {
+    const P2& p = x[i];
+    const P2& q = x[(i + 1) % n];
+    const double dp = side * cross2(a, b, p), dq = side * cross2(a, b, q);
+    if (dp >= 0) out.push_back(p);
+    if ((dp > 0 && dq < 0) || (dp < 0 && dq > 0)) {
+      const double t = dp / (dp - dq);
+      out.push_back({p.u + t * (q.u - p.u), p.v + t * (q.v - p.v)});
+    }
+  }
+  return out;
+}
+
+// The part of convex `x` inside convex `q` (`q_side`: the sign of q's area).
+Poly2 clip_inside(Poly2 x, const Poly2& q, double q_side) {
+  for (size_t k = 0; k < q.size() && x.size() >= 3; ++k) x = clip(x, q[k], q[(k + 1) % q.size()], q_side);
+  return x.size() >= 3 ? x : Poly2{};
+}
+
+bool convex(const Poly2& p) {
+  const double area = signed_area(p);
+  if (area == 0) return false;
+  const double tolerance = 1e-12 * std::fabs(area);
+  for (size_t i = 0; i < p.size(); ++i)
+    if (cross2(p[i], p[(i + 1) % p.size()], p[(i + 2) % p.size()]) * (area > 0 ? 1 : -1) < -tolerance) return false;
+  return true;
+}
+
+// A polygon on its plane, in the 2D coordinates its plane group shares.
+struct Flat {
+  int polygon = 0;
+  Vec3 n;                          // unit normal
+  double d = 0;                    // n . x on the plane
+  std::array<long long, 3> key{};  // the plane's normal, signed to be canonical, rounded to 1e-5
+  double offset = 0;               // that normal . x
+  bool flipped = false;            // the polygon faces against the canonical normal
+  int axis = 0;                    // the dominant axis of the normal: projected away
+  Poly2 points;
+  double lo_u = 0, hi_u = 0, lo_v = 0, hi_v = 0;
+  bool is_convex = false;
+};
+
+Flat make_flat(const Polygon& poly, int index) {
+  Flat f;
+  f.polygon = index;
+  const auto& vs = poly.vertices;
+  Vec3 n{0, 0, 0}, c{0, 0, 0};
+  for (size_t i = 0; i < vs.size(); ++i) {  // Newell's normal
+    const Vec3& p = vs[i];
+    const Vec3& q = vs[(i + 1) % vs.size()];
+    n.x += (p.y - q.y) * (p.z + q.z);
+    n.y += (p.z - q.z) * (p.x + q.x);
+    n.z += (p.x - q.x) * (p.y + q.y);
+    c = c + p;
+  }
+  const double len = length(n);
+  if (!(len > 0)) return f;
+  f.n = n * (1.0 / len);
+  c = c * (1.0 / static_cast<double>(vs.size()));
+  f.d = dot(f.n, c);
+  f.axis = std::fabs(f.n.x) >= std::fabs(f.n.y) && std::fabs(f.n.x) >= std::fabs(f.n.z) ? 0
+           : std::fabs(f.n.y) >= std::fabs(f.n.z)                                      ? 1
+                                                                                         : 2;
+  f.flipped = f.n[f.axis] < 0;
+  const Vec3 canonical = f.flipped ? -f.n : f.n;
+  f.key = {std::llround(canonical.x * 1e5), std::llround(canonical.y * 1e5), std::llround(canonical.z * 1e5)};
+  f.offset = dot(canonical, c);
+  const int ua = (f.axis + 1) % 3, va = (f.axis + 2) % 3;
+  f.lo_u = f.lo_v = INFINITY;
+  f.hi_u = f.hi_v = -INFINITY;
+  for (const Vec3& p : vs) {
+    const P2 q{p[ua], p[va]};
+    f.points.push_back(q);
+    f.lo_u = std::min(f.lo_u, q.u);
+    f.hi_u = std::max(f.hi_u, q.u);
+    f.lo_v = std::min(f.lo_v, q.v);
+    f.hi_v = std::max(f.hi_v, q.v);
+  }
+  f.is_convex = vs.size() >= 3 && convex(f.points);
+  return f;
+}
+
+// A piece worth keeping: wider on average than `width`.
+bool substantial(const Poly2& p, double width) {
+  return p.size() >= 3 && std::fabs(signed_area(p)) > width * perimeter(p);
+}
+
+// `x` split by convex `q`: its part inside q, then the parts outside q's
+// edges one by one (each inside the edges before it). Empty when x and q
+// share no area (x stays whole).
+std::vector<std::pair<Poly2, bool>> split_by(const Poly2& x, const Poly2& q, double width) {
+  const double q_side = signed_area(q) > 0 ? 1.0 : -1.0;
+  const Poly2 inside = clip_inside(x, q, q_side);
+  if (!substantial(inside, width)) return {};
+  std::vector<std::pair<Poly2, bool>> out{{inside, true}};
+  Poly2 rest = x;
+  for (size_t k = 0; k < q.size() && rest.size() >= 3; ++k) {
+    const P2 &a = q[k], &b = q[(k + 1) % q.size()];
+    const Poly2 outside = clip(rest, a, b, -q_side);
+    if (outside.size() >= 3 && substantial(outside, width)) out.push_back({outside, false});
+    rest = clip(rest, a, b, q_side);
+  }
+  return out;
+}
+
+}  // namespace
+
+ContactSplit split_contacts(Scene& scene) {
+  ContactSplit result;
+  const double size = std::max(scene.bounds().diagonal(), 1e-30);
+  const double plane_eps = 1e-7 * size;
+  std::vector<Flat> flats;
+  for (size_t k = 0; k < scene.polygons.size(); ++k) {
+    Flat f = make_flat(scene.polygons[k], static_cast<int>(k));
+    if (!f.points.empty()) flats.push_back(std::move(f));
+  }
+  std::sort(flats.begin(), flats.end(), [](const Flat& a, const Flat& b) {
+    return a.key != b.key ? a.key < b.key : a.offset < b.offset;
+  });
+  // Partners of each polygon: the polygons it is in contact with (indices into flats).
+  std::vector<std::vector<size_t>> partners(flats.size());
+  size_t budget = 200'000'000;  // box tests: a column of a million tiles is no hang
+  std::vector<size_t> group;
+  for (size_t i = 0; i < flats.size() && budget > 0;) {
+    size_t j = i + 1;
+    while (j < flats.size() && flats[j].key == flats[i].key && flats[j].offset - flats[j - 1].offset <= plane_eps) ++j;
+    bool both_ways = false;
+    for (size_t k = i + 1; k < j; ++k) both_ways |= flats[k].flipped != flats[i].flipped;
+    if (both_ways) {
+      group.clear();
+      for (size_t k = i; k < j; ++k) group.push_back(k);
+      std::sort(group.begin(), group.end(), [&](size_t a, size_t b) { return flats[a].lo_u < flats[b].lo_u; });
+      for (size_t x = 0; x < group.size() && budget > 0; ++x) {
+        const Flat& a = flats[group[x]];
+        for (size_t y = x + 1; y < group.size() && flats[group[y]].lo_u < a.hi_u && budget > 0; ++y) {
+          const Flat& b = flats[group[y]];
+          --budget;
+          if (a.flipped == b.flipped || b.lo_v >= a.hi_v || a.lo_v >= b.hi_v) continue;
+          if (std::fabs(a.offset - b.offset) > plane_eps) continue;
+          if (!a.is_convex || !b.is_convex) {  // boxes overlap; not examined further
+            ++result.skipped;
+            continue;
+          }
+          const double sb = signed_area(b.points) > 0 ? 1.0 : -1.0;
+          if (!substantial(clip_inside(a.points, b.points, sb), plane_eps)) continue;
+          partners[group[x]].push_back(group[y]);
+          partners[group[y]].push_back(group[x]);
+          ++result.pairs;
+        }
+      }
+    }
+    i = j;
+  }
+  if (result.pairs == 0) return result;
+
+  // Each polygon in contact becomes its pieces, in its place.
+  std::vector<std::vector<Polygon>> replaced(scene.polygons.size());
+  for (size_t k = 0; k < flats.size(); ++k) {
+    if (partners[k].empty()) continue;
+    const Flat& f = flats[k];
+    std::vector<Poly2> pieces{f.points};
+    for (const size_t q : partners[k]) {
+      std::vector<Poly2> next;
+      for (const Poly2& x : pieces) {
+        auto parts = split_by(x, flats[q].points, plane_eps);
+        if (parts.empty()) next.push_back(x);
+        for (auto& [p, in] : parts) next.push_back(std::move(p));
+      }
+      pieces = std::move(next);
+    }
+    if (pieces.size() < 2) continue;  // wholly in contact: it stays as it is
+    const Polygon& original = scene.polygons[static_cast<size_t>(f.polygon)];
+    const int ua = (f.axis + 1) % 3, va = (f.axis + 2) % 3;
+    for (const Poly2& piece : pieces) {
+      Polygon p;
+      p.material = original.material;
+      p.object = original.object;
+      for (const P2& q : piece) {
+        Vec3 x;
+        x[ua] = q.u;
+        x[va] = q.v;
+        x[f.axis] = (f.d - f.n[ua] * q.u - f.n[va] * q.v) / f.n[f.axis];
+        p.vertices.push_back(x);
+      }
+      replaced[static_cast<size_t>(f.polygon)].push_back(std::move(p));
+    }
+    ++result.split;
+    result.pieces += pieces.size();
+  }
+  std::vector<Polygon> polygons;
+  polygons.reserve(scene.polygons.size() + result.pieces);
+  for (size_t k = 0; k < scene.polygons.size(); ++k) {
+    if (replaced[k].empty()) polygons.push_back(std::move(scene.polygons[k]));
+    else for (Polygon& p : replaced[k]) polygons.push_back(std::move(p));
+  }
+  scene.polygons = std::move(polygons);
+  return result;
+}
+
+}  // namespace mpath

@@ -1,0 +1,31 @@
+// Surfaces pressed against each other (a frame on a wall, a book on a shelf,
+// a block on the floor): two coplanar polygons facing each other whose
+// interiors share area. No light reaches where they touch, so there the two
+// see only each other. A patch straddling the edge of the contact would mix
+// the lit and the covered part into one radiosity and light the covered
+// side of the other surface with it; so each polygon of such a pair is split
+// into its part in contact and the rest, at load time, whatever the mesh
+// size (docs/scene-formats.md, "Surfaces in contact").
+#pragma once
+
+#include <cstddef>
+
+#include "scene.h"
+
+namespace mpath {
+
+struct ContactSplit {
+  size_t pairs = 0;      // polygon pairs in contact
+  size_t split = 0;      // polygons split
+  size_t pieces = 0;     // the polygons they became
+  size_t skipped = 0;    // facing pairs whose boxes overlap, left whole: a polygon is not convex
+};
+
+// Splits every polygon of `scene` that is in contact with another: planes
+// within 1e-7 of the scene's size, normals opposite within 1e-5, interiors
+// sharing area. Convex polygons only (facing pairs with a concave one whose
+// boxes overlap are counted in `skipped`). Pieces keep the polygon's material, object and facing; the
+// order of polygons is kept (a split polygon's pieces take its place).
+ContactSplit split_contacts(Scene& scene);
+
+}  // namespace mpath

@@ -1,0 +1,200 @@
+// Surfaces pressed against each other (src/scene/contact.h): the split of
+// polygons at their contacts, checked against analytic overlap areas over
+// random layouts, and what the split is for: a frame on a wall, at any mesh
+// size, has a back side that sees only the wall under it, so in a room lit
+// from elsewhere it stays dark; the furnace stays exact.
+#include "contact.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "mesh.h"
+#include "test_util.h"
+
+namespace mpath {
+namespace {
+
+double area_of(const Polygon& p) { return polygon_area(p.vertices); }
+
+// A wall x = 0 facing +x, 4 x 3, and boxes pressed against it (their backs
+// on x = 0 facing -x), each given as its (y, z) rectangle.
+struct Rect {
+  double y0, z0, y1, z1;
+};
+
+Scene wall_with(const std::vector<Rect>& rects) {
+  Scene s;
+  s.file = "wall";
+  const int m = test::add_material(s, "m", 0.5, 0.0);
+  test::add_quad(s, {0, 0, 0}, {0, 4, 0}, {0, 4, 3}, {0, 0, 3}, m, test::add_object(s, "wall"));
+  for (const Rect& r : rects)
+    test::add_box(s, {0, r.y0, r.z0}, {0.05, r.y1, r.z1}, false, m, test::add_object(s, "frame"));
+  return s;
+}
+
+// Of the wall's polygons after a split (those at x = 0 facing +x), the area
+// inside rectangle r and outside every rectangle.
+struct WallAreas {
+  double total = 0, inside_any = 0;
+  size_t pieces = 0;
+};
+
+WallAreas wall_areas(const Scene& s, const std::vector<Rect>& rects) {
+  WallAreas a;
+  for (const Polygon& p : s.polygons) {
+    const Vec3 n = newell_normal(p.vertices);
+    bool on_wall = n.x > 0;
+    for (const Vec3& v : p.vertices) on_wall &= std::fabs(v.x) < 1e-12;
+    if (!on_wall) continue;
+    ++a.pieces;
+    a.total += area_of(p);
+    Vec3 c{0, 0, 0};
+    for (const Vec3& v : p.vertices) c = c + v * (1.0 / static_cast<double>(p.vertices.size()));
+    for (const Rect& r : rects)
+      if (c.y > r.y0 && c.y < r.y1 && c.z > r.z0 && c.z < r.z1) {
+        a.inside_any += area_of(p);
+        break;
+      }
+  }
+  return a;
+}
+
+TEST(Contact, AFrameOnAWallSplitsTheWallWhereItTouches) {
+  const std::vector<Rect> frame{{1.0, 1.0, 2.0, 1.8}};
+  Scene s = wall_with(frame);
+  const size_t before = s.polygons.size();
+  const ContactSplit c = split_contacts(s);
+  EXPECT_EQ(c.pairs, 1u);
+  EXPECT_EQ(c.split, 1u);  // the wall; the frame's back lies wholly on it
+  EXPECT_EQ(c.skipped, 0u);
+  const WallAreas a = wall_areas(s, frame);
+  EXPECT_NEAR(a.total, 12.0, 1e-12);
+  EXPECT_NEAR(a.inside_any, 0.8, 1e-12);
+  EXPECT_EQ(a.pieces, c.pieces);
+  EXPECT_EQ(s.polygons.size(), before - 1 + c.pieces);
+  // Splitting again finds the contact but has nothing left to split.
+  const ContactSplit again = split_contacts(s);
+  EXPECT_EQ(again.split, 0u);
+}
+
+TEST(Contact, SurfacesApartOrFacingTheSameWayAreLeftWhole) {
+  Scene s = wall_with({});
+  const int m = 0;
+  // A box 1 mm off the wall, and a poster lying on the wall facing the room.
+  test::add_box(s, {0.001, 1, 1}, {0.05, 2, 2}, false, m, test::add_object(s, "off the wall"));
+  test::add_quad(s, {0, 2.5, 1}, {0, 3.5, 1}, {0, 3.5, 2}, {0, 2.5, 2}, m, test::add_object(s, "poster"));
+  const size_t before = s.polygons.size();
+  EXPECT_EQ(split_contacts(s).pairs, 0u);
+  EXPECT_EQ(s.polygons.size(), before);
+}
+
+// Random frames on the wall, overlapping it in part at its edges too: the
+// pieces keep the wall's area, and its part in contact is the area the
+// rectangles cover (computed independently on a fine grid of the wall).
+TEST(Contact, RandomFramesSplitTheWallIntoWhatTheyCoverAndTheRest) {
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> y(-0.5, 4.0), z(-0.5, 3.0), size(0.1, 1.2);
+    std::vector<Rect> rects;
+    const int count = 1 + static_cast<int>(seed % 5);
+    while (static_cast<int>(rects.size()) < count) {
+      Rect r{y(rng), z(rng), 0, 0};
+      r.y1 = r.y0 + size(rng);
+      r.z1 = r.z0 + size(rng);
+      bool apart = true;  // frames do not overlap each other
+      for (const Rect& o : rects) apart &= r.y1 <= o.y0 || o.y1 <= r.y0 || r.z1 <= o.z0 || o.z1 <= r.z0;
+      if (apart && r.y1 > 0 && r.y0 < 4 && r.z1 > 0 && r.z0 < 3) rects.push_back(r);
+    }
+    Scene s = wall_with(rects);
+    split_contacts(s);
+    const WallAreas a = wall_areas(s, rects);
+    double covered = 0;
+    for (const Rect& r : rects)
+      covered += std::max(0.0, std::min(r.y1, 4.0) - std::max(r.y0, 0.0)) *
+                 std::max(0.0, std::min(r.z1, 3.0) - std::max(r.z0, 0.0));
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    EXPECT_NEAR(a.total, 12.0, 1e-9);
+    EXPECT_NEAR(a.inside_any, covered, 1e-9);
+    // Frames larger than the wall's edge are split too: their part off the wall stays apart.
+    double frame_backs = 0;
+    for (const Polygon& p : s.polygons)
+      if (newell_normal(p.vertices).x < 0 && std::fabs(p.vertices[0].x) < 1e-12) frame_backs += area_of(p);
+    double backs = 0;
+    for (const Rect& r : rects) backs += (r.y1 - r.y0) * (r.z1 - r.z0);
+    EXPECT_NEAR(frame_backs, backs, 1e-9);
+  }
+}
+
+// A closed room lit by a patch of its ceiling, a frame pressed against a wall.
+// The frame's back and the wall under it see only each other: no light
+// reaches them, so the back stays dark, with the wall's patches straddling
+// the frame or not. Left unsplit, a coarse wall patch lights the back with
+// the radiosity of its lit part, which shows the check can fail.
+double frame_back_radiosity(bool split, double max_patch_area) {
+  Scene s;
+  s.file = "room";
+  const int grey = test::add_material(s, "grey", 0.6, 0.0);
+  const int lamp = test::add_material(s, "lamp", 0.0, 10.0);
+  test::add_box(s, {0, 0, 0}, {4, 4, 3}, true, grey, test::add_object(s, "room"));
+  test::add_quad(s, {1.5, 1.5, 2.999}, {1.5, 2.5, 2.999}, {2.5, 2.5, 2.999}, {2.5, 1.5, 2.999}, lamp,
+                 test::add_object(s, "lamp"));
+  test::add_box(s, {0, 1.3, 1.1}, {0.04, 2.1, 1.7}, false, grey, test::add_object(s, "frame"));
+  if (split) EXPECT_EQ(split_contacts(s).pairs, 1u);
+  Options o = test::test_options(400'000, 200'000, max_patch_area);
+  o.solver.iterations = 30;
+  o.solver.tolerance = 1e-4;
+  const test::Solved r = test::solve_classic_in_memory(s, o);
+  EXPECT_LT(std::fabs(r.state.energy_residual()) / r.state.emitted_total(), 1e-10);
+  double power = 0, area = 0, room = 0, room_area = 0;
+  for (size_t f = 0; f < r.state.faces; ++f) {
+    const Patch& p = r.mesh.patches[r.mesh.face_patch[f]];
+    const double a = r.mesh.face_area(static_cast<int>(f));
+    const double b = r.state.radiosity(r.mesh, f)[0];
+    if (p.object == 2 && p.normal.x < -0.5) {  // the frame's back
+      power += b * a;
+      area += a;
+    } else if (p.object == 0) {
+      room += b * a;
+      room_area += a;
+    }
+  }
+  EXPECT_GT(room / room_area, 0.5);  // the room is lit
+  return power / area / (room / room_area);
+}
+
+TEST(Contact, AFramesBackSeesOnlyTheWallUnderItAtAnyMeshSize) {
+  for (const double area : {2.0, 0.3, 0.02}) {
+    SCOPED_TRACE("max patch area " + std::to_string(area));
+    EXPECT_EQ(frame_back_radiosity(true, area), 0.0);
+  }
+  // Unsplit, a wall patch wider than the frame lights its back.
+  EXPECT_GT(frame_back_radiosity(false, 2.0), 0.2);
+}
+
+// A furnace with furniture pressed on the floor and on each other stays
+// exact when split: the covered sides form closed cavities of their own.
+TEST(Contact, AFurnaceWithContactsStaysExactWhenSplit) {
+  const double rho = 0.5, exitance = 1.0;
+  Scene s = test::furnace_scene(rho, exitance);
+  test::add_table(s, 0.9, 0.7, 0, "table");
+  const ContactSplit c = split_contacts(s);
+  EXPECT_GE(c.pairs, 6u);  // the block and the four legs on the floor, the column on the floor and ceiling
+  Options o = test::test_options(1'000'000, 200'000, 0.05);
+  o.solver.iterations = 40;
+  o.solver.tolerance = 1e-4;
+  const test::Solved r = test::solve_classic_in_memory(s, o);
+  ASSERT_TRUE(r.log.converged);
+  double mean = 0, area = 0;
+  for (size_t f = 0; f < r.state.faces; ++f) {
+    const double a = r.mesh.face_area(static_cast<int>(f));
+    mean += a * (r.state.radiosity(r.mesh, f)[0] * (1 - rho) / exitance - 1);
+    area += a;
+  }
+  EXPECT_NEAR(mean / area, 0.0, 2e-3);
+}
+
+}  // namespace
+}  // namespace mpath
