@@ -12,6 +12,7 @@
 #include <random>
 
 #include "mesh.h"
+#include "scene_readers.h"
 #include "test_util.h"
 
 namespace mpath {
@@ -194,6 +195,40 @@ TEST(Contact, AFurnaceWithContactsStaysExactWhenSplit) {
     area += a;
   }
   EXPECT_NEAR(mean / area, 0.0, 2e-3);
+}
+
+}  // namespace
+}  // namespace mpath
+
+namespace mpath {
+namespace {
+
+// A wall given twice facing the same way (RenderPark's hospital repeats half
+// its polygons): load_scene keeps one copy, and the solve converges. With
+// both copies the lines meet one of them by chance and power that the first
+// shot left on the other is never sent on.
+TEST(Duplicates, ARepeatedWallIsOneSurface) {
+  Scene s;
+  s.file = "room";
+  const int grey = test::add_material(s, "grey", 0.6, 0.0);
+  const int lamp = test::add_material(s, "lamp", 0.0, 10.0);
+  test::add_box(s, {0, 0, 0}, {4, 4, 3}, true, grey, test::add_object(s, "room"));
+  for (int k = 0; k < 6; ++k) s.polygons.push_back(s.polygons[static_cast<size_t>(k)]);  // every wall twice
+  test::add_quad(s, {1.5, 1.5, 2.999}, {1.5, 2.5, 2.999}, {2.5, 2.5, 2.999}, {2.5, 1.5, 2.999}, lamp,
+                 test::add_object(s, "lamp"));
+  test::TempDir dir;
+  SceneOptions so;
+  so.file = test::write_obj(s, dir / "room");
+  std::vector<std::string> warnings;
+  const Scene loaded = load_scene(so, 16, warnings);
+  EXPECT_EQ(loaded.polygons.size(), 7u);
+  Options o = test::test_options(400'000, 200'000, 0.5);
+  o.solver.iterations = 40;
+  o.solver.tolerance = 1e-4;
+  const test::Solved one = test::solve_classic_in_memory(loaded, o);
+  EXPECT_TRUE(one.log.converged);
+  const test::Solved both = test::solve_classic_in_memory(s, o);
+  EXPECT_FALSE(both.log.converged) << "unshot " << both.state.remaining_fraction();
 }
 
 }  // namespace

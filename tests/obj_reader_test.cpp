@@ -134,11 +134,23 @@ std::vector<std::string> loader_warnings(const std::string& obj) {
   return w;
 }
 
-// A polygon given twice (either way round) is a warning with the count.
-TEST(SceneLoader, WarnsOfDuplicatedPolygons) {
-  const auto w = loader_warnings("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nf 1 2 3 4\nf 4 3 2 1\nf 2 3 4 1\nf 1 2 5\n");
-  ASSERT_EQ(w.size(), 1u);
-  EXPECT_EQ(w[0].find("2 polygon(s) have the same vertices as another"), 0u) << w[0];
+// A polygon given twice facing the same way is one surface: the repeat is
+// dropped, with a warning; given the other way round it is kept back to
+// back, with a warning of its own.
+TEST(SceneLoader, DropsRepeatedPolygonsAndWarnsOfReversedOnes) {
+  TempDir dir;
+  write_file(dir / "d.mtl", "newmtl light\nKd 0.5 0.5 0.5\n");
+  write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
+                            "f 1 2 3 4\nf 4 3 2 1\nf 2 3 4 1\nf 1 2 5\nf 3 4 1 2\n");
+  SceneOptions o;
+  o.file = dir / "d.obj";
+  o.emitters["light"] = {1, 1, 1};
+  std::vector<std::string> w;
+  const Scene s = load_scene(o, 16, w);
+  EXPECT_EQ(s.polygons.size(), 3u);  // the square, its reverse and the triangle
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_EQ(w[0].find("2 polygon(s) repeat an earlier one facing the same way"), 0u) << w[0];
+  EXPECT_EQ(w[1].find("1 polygon(s) have the same vertices as another facing the other way"), 0u) << w[1];
 }
 
 // Coplanar polygons facing the same way that share area are found; tiles

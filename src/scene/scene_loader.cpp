@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <vector>
 
@@ -58,21 +59,44 @@ static void check_extent(const Scene& scene) {
 
 // Polygons whose vertex set (in any order, rounded to 1e-9 of the scene)
 // is another's.
-static size_t repeated_polygons(const Scene& scene) {
+// Polygons with the same vertices as an earlier one (within 1e-9 of the
+// scene's size). One facing the same way is the same surface twice: it is
+// dropped (the lines would meet one copy by chance, and power the first
+// shot left on the other would never be sent on). One facing the other way
+// is kept: two one-sided polygons back to back make a wall with two faces.
+struct Repeated {
+  size_t dropped = 0;   // same facing
+  size_t reversed = 0;  // facing the other way, kept
+};
+
+static Repeated drop_repeated_polygons(Scene& scene) {
   const Bounds bounds = scene.bounds();
   const double grid = 1e-9 * std::max(bounds.diagonal(), 1e-30);  // offsets from the corner stay below 1e9 steps
-  std::set<std::vector<std::array<long long, 3>>> seen;
-  size_t repeated = 0;
-  for (const Polygon& p : scene.polygons) {
+  std::map<std::vector<std::array<long long, 3>>, std::vector<size_t>> seen;  // vertex set -> polygons kept
+  Repeated r;
+  std::vector<Polygon> kept;
+  kept.reserve(scene.polygons.size());
+  for (Polygon& p : scene.polygons) {
     std::vector<std::array<long long, 3>> key;
     key.reserve(p.vertices.size());
     for (const Vec3& v : p.vertices)
       key.push_back({std::llround((v.x - bounds.lo.x) / grid), std::llround((v.y - bounds.lo.y) / grid),
                      std::llround((v.z - bounds.lo.z) / grid)});
     std::sort(key.begin(), key.end());
-    if (!seen.insert(std::move(key)).second) ++repeated;
+    auto& same = seen[std::move(key)];
+    const Vec3 n = newell_normal(p.vertices);
+    bool duplicate = false, reversed = false;
+    for (const size_t k : same) (dot(newell_normal(kept[k].vertices), n) > 0 ? duplicate : reversed) = true;
+    if (duplicate) {
+      ++r.dropped;
+      continue;
+    }
+    if (reversed) ++r.reversed;
+    same.push_back(kept.size());
+    kept.push_back(std::move(p));
   }
-  return repeated;
+  scene.polygons = std::move(kept);
+  return r;
 }
 
 Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<std::string>& warnings) {
@@ -104,10 +128,15 @@ Scene load_scene(const SceneOptions& options, int curve_segments, std::vector<st
       throw InputError(fmt::format("{}: polygon {} has {} vertices; mpath takes at most {} (split it into smaller ones)",
                                    path.string(), i + 1, scene.polygons[i].vertices.size(), kMaxPolygonVertices));
   check_extent(scene);
-  if (const size_t repeated = repeated_polygons(scene); repeated > 0)
+  const Repeated repeated = drop_repeated_polygons(scene);
+  if (repeated.dropped > 0)
+    warnings.push_back(fmt::format("{} polygon(s) repeat an earlier one facing the same way (duplicated faces): "
+                                   "dropped, as one surface", repeated.dropped));
+  if (repeated.reversed > 0)
     warnings.push_back(fmt::format(
-        "{} polygon(s) have the same vertices as another (duplicated faces): coincident surfaces are seen by "
-        "chance by the lines and the methods light them differently; remove the duplicates", repeated));
+        "{} polygon(s) have the same vertices as another facing the other way: kept back to back; where both are "
+        "two-sided the two coincide and the lines meet them by chance (make them one-sided, or one two-sided)",
+        repeated.reversed));
   if (const CoplanarOverlaps o = find_coplanar_overlaps(scene); o.polygons > 0) {
     auto name = [&](int p) {
       return fmt::format("polygon {} of object '{}'", p + 1, scene.objects.at(scene.polygons[p].object).name);
