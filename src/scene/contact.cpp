@@ -5,12 +5,11 @@
 #include <cmath>
 #include <vector>
 
+#include "plane_view.h"
+
 namespace mpath {
 namespace {
 
-struct P2 {
-  double u, v;
-};
 using Poly2 = std::vector<P2>;
 
 double cross2(const P2& a, const P2& b, const P2& c) { return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u); }
@@ -76,40 +75,21 @@ struct Flat {
 Flat make_flat(const Polygon& poly, int index) {
   Flat f;
   f.polygon = index;
-  const auto& vs = poly.vertices;
-  Vec3 n{0, 0, 0}, c{0, 0, 0};
-  for (size_t i = 0; i < vs.size(); ++i) {  // Newell's normal
-    const Vec3& p = vs[i];
-    const Vec3& q = vs[(i + 1) % vs.size()];
-    n.x += (p.y - q.y) * (p.z + q.z);
-    n.y += (p.z - q.z) * (p.x + q.x);
-    n.z += (p.x - q.x) * (p.y + q.y);
-    c = c + p;
-  }
-  const double len = length(n);
-  if (!(len > 0)) return f;
-  f.n = n * (1.0 / len);
-  c = c * (1.0 / static_cast<double>(vs.size()));
-  f.d = dot(f.n, c);
-  f.axis = std::fabs(f.n.x) >= std::fabs(f.n.y) && std::fabs(f.n.x) >= std::fabs(f.n.z) ? 0
-           : std::fabs(f.n.y) >= std::fabs(f.n.z)                                      ? 1
-                                                                                         : 2;
+  PlaneView view;
+  if (!plane_view(poly.vertices, 0.0, view)) return f;
+  f.n = view.n;
+  f.d = dot(f.n, view.c);
+  f.axis = view.axis;
   f.flipped = f.n[f.axis] < 0;
   const Vec3 canonical = f.flipped ? -f.n : f.n;
   f.key = {std::llround(canonical.x * 1e5), std::llround(canonical.y * 1e5), std::llround(canonical.z * 1e5)};
-  f.offset = dot(canonical, c);
-  const int ua = (f.axis + 1) % 3, va = (f.axis + 2) % 3;
-  f.lo_u = f.lo_v = INFINITY;
-  f.hi_u = f.hi_v = -INFINITY;
-  for (const Vec3& p : vs) {
-    const P2 q{p[ua], p[va]};
-    f.points.push_back(q);
-    f.lo_u = std::min(f.lo_u, q.u);
-    f.hi_u = std::max(f.hi_u, q.u);
-    f.lo_v = std::min(f.lo_v, q.v);
-    f.hi_v = std::max(f.hi_v, q.v);
-  }
-  f.is_convex = vs.size() >= 3 && convex(f.points);
+  f.offset = dot(canonical, view.c);
+  f.points = std::move(view.points);
+  f.lo_u = view.lo_u;
+  f.hi_u = view.hi_u;
+  f.lo_v = view.lo_v;
+  f.hi_v = view.hi_v;
+  f.is_convex = convex(f.points);
   return f;
 }
 

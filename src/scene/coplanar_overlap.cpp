@@ -5,12 +5,10 @@
 #include <cmath>
 #include <vector>
 
+#include "plane_view.h"
+
 namespace mpath {
 namespace {
-
-struct P2 {
-  double u, v;
-};
 
 double orient(const P2& a, const P2& b, const P2& c) { return (b.u - a.u) * (c.v - a.v) - (b.v - a.v) * (c.u - a.u); }
 
@@ -89,40 +87,19 @@ CoplanarOverlaps find_coplanar_overlaps(const Scene& scene, size_t budget) {
   const double size = std::max(scene.bounds().diagonal(), 1e-30);
   const double plane_eps = 1e-7 * size, eps = 1e-9 * size;
   std::vector<Flat> flats;
+  PlaneView view;
   for (size_t k = 0; k < scene.polygons.size(); ++k) {
-    const auto& vs = scene.polygons[k].vertices;
-    if (vs.size() < 3) continue;
-    Vec3 n{0, 0, 0}, c{0, 0, 0};
-    for (size_t i = 0; i < vs.size(); ++i) {  // Newell's normal
-      const Vec3& p = vs[i];
-      const Vec3& q = vs[(i + 1) % vs.size()];
-      n.x += (p.y - q.y) * (p.z + q.z);
-      n.y += (p.z - q.z) * (p.x + q.x);
-      n.z += (p.x - q.x) * (p.y + q.y);
-      c = c + p;
-    }
-    const double len = length(n);
-    if (!(len > 1e-12 * size * size)) continue;  // no area
-    n = n * (1.0 / len);
-    c = c * (1.0 / static_cast<double>(vs.size()));
+    if (!plane_view(scene.polygons[k].vertices, 1e-12 * size * size, view)) continue;  // no area
+    const Vec3& n = view.n;
     Flat f;
     f.polygon = static_cast<int>(k);
     f.normal_key = {std::llround(n.x * 1e5), std::llround(n.y * 1e5), std::llround(n.z * 1e5)};
-    f.offset = dot(n, c);
-    const int axis = std::fabs(n.x) >= std::fabs(n.y) && std::fabs(n.x) >= std::fabs(n.z) ? 0
-                     : std::fabs(n.y) >= std::fabs(n.z)                                  ? 1
-                                                                                          : 2;
-    const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
-    f.lo_u = f.lo_v = INFINITY;
-    f.hi_u = f.hi_v = -INFINITY;
-    for (const Vec3& p : vs) {
-      const P2 q{p[ua], p[va]};
-      f.points.push_back(q);
-      f.lo_u = std::min(f.lo_u, q.u);
-      f.hi_u = std::max(f.hi_u, q.u);
-      f.lo_v = std::min(f.lo_v, q.v);
-      f.hi_v = std::max(f.hi_v, q.v);
-    }
+    f.offset = dot(n, view.c);
+    f.points = view.points;
+    f.lo_u = view.lo_u;
+    f.hi_u = view.hi_u;
+    f.lo_v = view.lo_v;
+    f.hi_v = view.hi_v;
     flats.push_back(std::move(f));
   }
   // Planes: the same rounded normal (so the same facing), offsets within plane_eps.
