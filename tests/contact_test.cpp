@@ -79,6 +79,11 @@ TEST(Contact, AFrameOnAWallSplitsTheWallWhereItTouches) {
   // Splitting again finds the contact but has nothing left to split.
   const ContactSplit again = split_contacts(s);
   EXPECT_EQ(again.split, 0u);
+  // A contact of at most min_area (0.8 here) is left whole.
+  Scene small = wall_with(frame);
+  EXPECT_EQ(split_contacts(small, 0.81).pairs, 0u);
+  EXPECT_EQ(small.polygons.size(), before);
+  EXPECT_EQ(split_contacts(small, 0.79).pairs, 1u);
 }
 
 TEST(Contact, SurfacesApartOrFacingTheSameWayAreLeftWhole) {

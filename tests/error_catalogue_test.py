@@ -138,6 +138,7 @@ case("colour negative", "must not be negative", over=["scene.emitters.lamp=[-1, 
 case("colour cap", "must be at most", over=["scene.materials.wall=[2, 0, 0]"])
 case("sides", "expected 1 or 2, got 3", over=["scene.mgf_default_sides=3"])
 case("patch area", "expected a positive area (or 0 for automatic)", over=["mesh.max_patch_area=-1"])
+case("contact area", "expected an area >= 0 (0: the largest patch area)", over=["mesh.contact_min_area=-0.5"])
 case("curve segments", "expected an integer in [3, 1024]", over=["mesh.curve_segments=2"])
 case("vp grid", "expected 0 (automatic) or a power of two up to 64", over=["hierarchy.vp_grid=3"])
 case("seed", "expected a non-negative integer", over=["lines.seed=-1"])

@@ -13,7 +13,11 @@ PreparedScene prepare_scene(const Options& options) {
   PreparedScene out;
   auto t0 = clock::now();
   out.scene = load_scene(options.scene, options.mesh.curve_segments, out.warnings);
-  if (options.mesh.split_contacts) out.contacts = split_contacts(out.scene);
+  if (options.mesh.split_contacts) {
+    // Contacts up to a patch's area are left (their covered sides are below the mesh's resolution).
+    const double patch = options.mesh.max_patch_area > 0 ? options.mesh.max_patch_area : automatic_patch_area(out.scene);
+    out.contacts = split_contacts(out.scene, options.mesh.contact_min_area > 0 ? options.mesh.contact_min_area : patch);
+  }
   auto t1 = clock::now();
   out.mesh = build_mesh(out.scene, options.mesh.max_patch_area);
   auto t2 = clock::now();

@@ -29,6 +29,7 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
       {"mesh.max_patch_area", fmt::format("{}", o.mesh.max_patch_area)},
       {"mesh.curve_segments", std::to_string(o.mesh.curve_segments)},
       {"mesh.split_contacts", o.mesh.split_contacts ? "true" : "false"},
+      {"mesh.contact_min_area", fmt::format("{}", o.mesh.contact_min_area)},
       {"scene.two_sided", two_sided},
       {"scene.mgf_default_sides", std::to_string(o.scene.mgf_default_sides)},
       {"lines.total", std::to_string(o.lines.total)},

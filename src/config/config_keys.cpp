@@ -370,6 +370,12 @@ std::vector<ConfigKey> make_table() {
        "split polygons pressed against another (a frame on a wall) into their part in contact and the rest, so that "
        "no patch mixes the two (see scene-formats.md)",
        SET(o.mesh.split_contacts = get_bool(n, s)), GET(o.mesh.split_contacts)},
+      {"mesh.contact_min_area",
+       "contacts of at most this area (scene units squared) are left whole; 0: the largest patch area",
+       SET(o.mesh.contact_min_area = get_number(n, s);
+           if (!(o.mesh.contact_min_area >= 0) || !std::isfinite(o.mesh.contact_min_area))
+             bad_value(s, "expected an area >= 0 (0: the largest patch area)")),
+       GET(o.mesh.contact_min_area)},
       {"hierarchy.group_threshold", "two items group when (sum of their box areas) / (area of the merged box) exceeds this",
        SET(o.hierarchy.group_threshold = in_range(get_number(n, s), 0.0, 1e9, s)), GET(o.hierarchy.group_threshold)},
       {"hierarchy.vp_area_ratio",

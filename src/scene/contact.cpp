@@ -93,32 +93,73 @@ Flat make_flat(const Polygon& poly, int index) {
   return f;
 }
 
+// `p` without repeated corners and corners on a straight edge (clipping
+// leaves both), so that a rectangle cut from a rectangle stays a
+// rectangle, which the mesher grids, instead of a pentagon it triangulates.
+Poly2 simplified(const Poly2& p, double eps) {
+  Poly2 out;
+  for (const P2& q : p)
+    if (out.empty() || std::hypot(q.u - out.back().u, q.v - out.back().v) > eps) out.push_back(q);
+  while (out.size() > 1 && std::hypot(out.front().u - out.back().u, out.front().v - out.back().v) <= eps) out.pop_back();
+  for (bool changed = true; changed && out.size() > 3;) {
+    changed = false;
+    for (size_t i = 0; i < out.size() && out.size() > 3; ++i) {
+      const P2& a = out[(i + out.size() - 1) % out.size()];
+      const P2& b = out[i];
+      const P2& c = out[(i + 1) % out.size()];
+      const double span = std::hypot(c.u - a.u, c.v - a.v);
+      if (std::fabs(cross2(a, b, c)) <= eps * span) {  // b within eps of the line a-c
+        out.erase(out.begin() + static_cast<long>(i));
+        changed = true;
+      }
+    }
+  }
+  return out;
+}
+
 // A piece worth keeping: wider on average than `width`.
 bool substantial(const Poly2& p, double width) {
   return p.size() >= 3 && std::fabs(signed_area(p)) > width * perimeter(p);
 }
 
-// `x` split by convex `q`: its part inside q, then the parts outside q's
-// edges one by one (each inside the edges before it). Empty when x and q
-// share no area (x stays whole).
-std::vector<std::pair<Poly2, bool>> split_by(const Poly2& x, const Poly2& q, double width) {
+// The parts of convex `x` outside convex `q`, edge by edge (each inside the
+// edges before it), appended to `out`; returns the part inside q.
+Poly2 cut_away(Poly2 rest, const Poly2& q, double width, std::vector<Poly2>& out) {
   const double q_side = signed_area(q) > 0 ? 1.0 : -1.0;
-  const Poly2 inside = clip_inside(x, q, q_side);
-  if (!substantial(inside, width)) return {};
-  std::vector<std::pair<Poly2, bool>> out{{inside, true}};
-  Poly2 rest = x;
   for (size_t k = 0; k < q.size() && rest.size() >= 3; ++k) {
     const P2 &a = q[k], &b = q[(k + 1) % q.size()];
-    const Poly2 outside = clip(rest, a, b, -q_side);
-    if (outside.size() >= 3 && substantial(outside, width)) out.push_back({outside, false});
+    Poly2 outside = clip(rest, a, b, -q_side);
+    if (substantial(outside, width)) out.push_back(std::move(outside));
     rest = clip(rest, a, b, q_side);
   }
+  return rest;
+}
+
+// `x` split by convex `q`: its part inside q first, then the rest. The rest
+// is cut first by q's bounding rectangle, whose pieces outside it are
+// rectangles where x is one (the mesher grids rectangles, and would
+// triangulate wedges), then inside that rectangle by q's own edges. Empty
+// when x and q share no area (x stays whole).
+std::vector<Poly2> split_by(const Poly2& x, const Poly2& q, double width) {
+  const double q_side = signed_area(q) > 0 ? 1.0 : -1.0;
+  Poly2 inside = clip_inside(x, q, q_side);
+  if (!substantial(inside, width)) return {};
+  std::vector<Poly2> out{std::move(inside)};
+  double lo_u = INFINITY, lo_v = INFINITY, hi_u = -INFINITY, hi_v = -INFINITY;
+  for (const P2& p : q) {
+    lo_u = std::min(lo_u, p.u);
+    lo_v = std::min(lo_v, p.v);
+    hi_u = std::max(hi_u, p.u);
+    hi_v = std::max(hi_v, p.v);
+  }
+  const Poly2 box{{lo_u, lo_v}, {hi_u, lo_v}, {hi_u, hi_v}, {lo_u, hi_v}};
+  cut_away(cut_away(x, box, width, out), q, width, out);
   return out;
 }
 
 }  // namespace
 
-ContactSplit split_contacts(Scene& scene) {
+ContactSplit split_contacts(Scene& scene, double min_area) {
   ContactSplit result;
   const double size = std::max(scene.bounds().diagonal(), 1e-30);
   const double plane_eps = 1e-7 * size;
@@ -155,7 +196,9 @@ ContactSplit split_contacts(Scene& scene) {
             continue;
           }
           const double sb = signed_area(b.points) > 0 ? 1.0 : -1.0;
-          if (!substantial(clip_inside(a.points, b.points, sb), plane_eps)) continue;
+          const Poly2 common = clip_inside(a.points, b.points, sb);
+          if (!substantial(common, plane_eps) || std::fabs(signed_area(common)) / std::fabs(a.n[a.axis]) <= min_area)
+            continue;
           partners[group[x]].push_back(group[y]);
           partners[group[y]].push_back(group[x]);
           ++result.pairs;
@@ -177,14 +220,15 @@ ContactSplit split_contacts(Scene& scene) {
       for (const Poly2& x : pieces) {
         auto parts = split_by(x, flats[q].points, plane_eps);
         if (parts.empty()) next.push_back(x);
-        for (auto& [p, in] : parts) next.push_back(std::move(p));
+        for (auto& p : parts) next.push_back(std::move(p));
       }
       pieces = std::move(next);
     }
     if (pieces.size() < 2) continue;  // wholly in contact: it stays as it is
     const Polygon& original = scene.polygons[static_cast<size_t>(f.polygon)];
     const int ua = (f.axis + 1) % 3, va = (f.axis + 2) % 3;
-    for (const Poly2& piece : pieces) {
+    for (const Poly2& raw : pieces) {
+      const Poly2 piece = simplified(raw, 1e-9 * size);
       Polygon p;
       p.material = original.material;
       p.object = original.object;
