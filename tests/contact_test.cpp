@@ -84,6 +84,11 @@ TEST(Contact, AFrameOnAWallSplitsTheWallWhereItTouches) {
   EXPECT_EQ(split_contacts(small, 0.81).pairs, 0u);
   EXPECT_EQ(small.polygons.size(), before);
   EXPECT_EQ(split_contacts(small, 0.79).pairs, 1u);
+  // Or when it covers more than min_share of the smaller object: the frame's
+  // back is 0.8 of its 1.78 m2.
+  Scene share = wall_with(frame);
+  EXPECT_EQ(split_contacts(share, 1.0, 0.5).pairs, 0u);
+  EXPECT_EQ(split_contacts(share, 1.0, kContactMinShare).pairs, 1u);
 }
 
 TEST(Contact, SurfacesApartOrFacingTheSameWayAreLeftWhole) {

@@ -14,9 +14,13 @@ PreparedScene prepare_scene(const Options& options) {
   auto t0 = clock::now();
   out.scene = load_scene(options.scene, options.mesh.curve_segments, out.warnings);
   if (options.mesh.split_contacts) {
-    // Contacts up to a patch's area are left (their covered sides are below the mesh's resolution).
+    // A contact is split when larger than a patch, or when it covers more
+    // than a fifth of the smaller object (a frame's bar, a picture's back):
+    // smaller ones (chair legs, books standing on a board) cover sides below
+    // the mesh's resolution and of little of their objects (scene-formats.md).
     const double patch = options.mesh.max_patch_area > 0 ? options.mesh.max_patch_area : automatic_patch_area(out.scene);
-    out.contacts = split_contacts(out.scene, options.mesh.contact_min_area > 0 ? options.mesh.contact_min_area : patch);
+    out.contacts = split_contacts(out.scene, options.mesh.contact_min_area > 0 ? options.mesh.contact_min_area : patch,
+                                  kContactMinShare);
   }
   auto t1 = clock::now();
   out.mesh = build_mesh(out.scene, options.mesh.max_patch_area);

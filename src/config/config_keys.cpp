@@ -371,7 +371,8 @@ std::vector<ConfigKey> make_table() {
        "no patch mixes the two (see scene-formats.md)",
        SET(o.mesh.split_contacts = get_bool(n, s)), GET(o.mesh.split_contacts)},
       {"mesh.contact_min_area",
-       "contacts of at most this area (scene units squared) are left whole; 0: the largest patch area",
+       "contacts of at most this area (scene units squared) are left whole unless they cover a fifth of the smaller "
+       "object; 0: the largest patch area",
        SET(o.mesh.contact_min_area = get_number(n, s);
            if (!(o.mesh.contact_min_area >= 0) || !std::isfinite(o.mesh.contact_min_area))
              bad_value(s, "expected an area >= 0 (0: the largest patch area)")),

@@ -159,10 +159,14 @@ std::vector<Poly2> split_by(const Poly2& x, const Poly2& q, double width) {
 
 }  // namespace
 
-ContactSplit split_contacts(Scene& scene, double min_area) {
+ContactSplit split_contacts(Scene& scene, double min_area, double min_share) {
   ContactSplit result;
   const double size = std::max(scene.bounds().diagonal(), 1e-30);
   const double plane_eps = 1e-7 * size;
+  std::vector<double> object_area(scene.objects.size() + 1, 0.0);
+  for (const Polygon& p : scene.polygons)
+    object_area.at(static_cast<size_t>(std::max(0, std::min<int>(p.object, static_cast<int>(scene.objects.size()))))) +=
+        polygon_area(p.vertices);
   std::vector<Flat> flats;
   for (size_t k = 0; k < scene.polygons.size(); ++k) {
     Flat f = make_flat(scene.polygons[k], static_cast<int>(k));
@@ -197,8 +201,11 @@ ContactSplit split_contacts(Scene& scene, double min_area) {
           }
           const double sb = signed_area(b.points) > 0 ? 1.0 : -1.0;
           const Poly2 common = clip_inside(a.points, b.points, sb);
-          if (!substantial(common, plane_eps) || std::fabs(signed_area(common)) / std::fabs(a.n[a.axis]) <= min_area)
-            continue;
+          if (!substantial(common, plane_eps)) continue;
+          const double shared = std::fabs(signed_area(common)) / std::fabs(a.n[a.axis]);
+          const double smaller = std::min(object_area[scene.polygons[a.polygon].object],
+                                          object_area[scene.polygons[b.polygon].object]);
+          if (shared <= min_area && !(min_share > 0 && shared > min_share * smaller)) continue;
           partners[group[x]].push_back(group[y]);
           partners[group[y]].push_back(group[x]);
           ++result.pairs;

@@ -23,9 +23,14 @@ struct ContactSplit {
 
 // Splits every polygon of `scene` that is in contact with another: planes
 // within 1e-7 of the scene's size, normals opposite within 1e-5, interiors
-// sharing area (more than `min_area` of it). Convex polygons only (facing pairs with a concave one whose
+// sharing area: more than `min_area` of it, or more than `min_share` of
+// the surface of the smaller of the two polygons' objects. Convex polygons only (facing pairs with a concave one whose
 // boxes overlap are counted in `skipped`). Pieces keep the polygon's material, object and facing; the
 // order of polygons is kept (a split polygon's pieces take its place).
-ContactSplit split_contacts(Scene& scene, double min_area = 0);
+ContactSplit split_contacts(Scene& scene, double min_area = 0, double min_share = 0);
+
+// The share of the smaller object's surface above which mpath splits a
+// contact whatever its area (mesh.split_contacts).
+inline constexpr double kContactMinShare = 0.2;
 
 }  // namespace mpath
