@@ -57,7 +57,7 @@ struct Options {
   struct Mesh {
     double max_patch_area = 0.0;  // 0: automatic, scene box area / 2000
     int curve_segments = 16;      // MGF curved primitives: segments around a circle
-    bool split_contacts = true;   // polygons pressed against another split at the contact (contact.h)
+    bool split_contacts = false;  // polygons pressed against another split at the contact (contact.h)
     double contact_min_area = 0;  // contacts of at most this area are left whole; 0: max_patch_area
   } mesh;
 
