@@ -265,6 +265,9 @@ case("MGF fan out", "files read through 'i'", over=over_mgf, files=dict(
     **{"f%d.mgf" % k: "i f%d.mgf\ni f%d.mgf\n" % (k + 1, k + 1) for k in range(1, 17)}))
 case("MGF arrays", "nested 'xf -a' arrays make", files=dict(
     mgf, **{"s.mgf": MGF_HEAD + "xf -a 10000 -t 1 0 0\nxf -a 10000 -t 0 1 0\nf a b c\nxf\nxf\n"}), over=over_mgf)
+case("MGF include arrays", "nested '-a' arrays make", files=dict(
+    mgf, **{"s.mgf": MGF_HEAD + "xf -a 10000 -t 1 0 0\ni x.mgf -a 10000 -t 0 1 0\nxf\n",
+            "x.mgf": "f a b c\n"}), over=over_mgf)
 case("MGF objects", "objects nested more than 256 deep", files=dict(
     mgf, **{"s.mgf": MGF_HEAD + "o x\n" * 300}), over=over_mgf)
 # A skipped line is a warning; a scene of nothing but such lines names the
@@ -300,7 +303,7 @@ for nm, line, expect in [
         ("xf -i", "xf -i 1e9 -t 1 0 0\n", "the count must be a whole number from 0 to 1000000"),
         ("xf arg", "xf -q\n", "unknown xf argument '-q'"),
         ("i", "i\n", "malformed 'i': expected 'i file [xf arguments]'"),
-        ("i -a", "i x.mgf -a 2\n", "'-a' arrays are supported in 'xf', not in 'i'"),
+        ("i -a", "i x.mgf -a\n", "'-a' needs a count"),
         ("f", "f a b\n", "malformed 'f': expected at least 3 vertices"),
         ("sph", "v x =\np 0 0 0\nsph x 0\n", "sphere radius must not be zero"),
         ("cone", "v x =\np 0 0 0\nv y =\np 0 0 1\ncone x 1 y -1\n", "'cone' radii must have one sign and not both be zero"),

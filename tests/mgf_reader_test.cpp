@@ -114,6 +114,26 @@ TEST(MgfReader, AppliesTransformsArraysAndIncludes) {
   EXPECT_EQ(included.object, 4);
 }
 
+// An include takes arrays as 'xf' does: the file is read once per element
+// (RenderPark's hospital places its lamps so), last array fastest.
+TEST(MgfReader, IncludesArraysOfAFile) {
+  TempDir dir;
+  write_file(dir / "part.mgf", "m lamp =\n\tc\n\ted 100\nv a =\n\tp 0 0 0\nv b =\n\tp 1 0 0\nv c =\n\tp 1 1 0\n"
+                               "v d =\n\tp 0 1 0\nf a b c d\n");
+  write_file(dir / "main.mgf", "i part.mgf -s 0.5 -a 2 -t 0 3 0 -a 3 -t 5 0 0\n");
+  std::vector<std::string> warnings;
+  const Scene s = read_mgf(dir / "main.mgf", 16, 2, &warnings);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+  ASSERT_EQ(s.polygons.size(), 6u);
+  for (int j = 0; j < 2; ++j)
+    for (int k = 0; k < 3; ++k) {
+      const Polygon& p = s.polygons[static_cast<size_t>(j * 3 + k)];
+      EXPECT_NEAR(polygon_area(p.vertices), 0.25, 1e-12);
+      EXPECT_NEAR(p.vertices[0].x, 5.0 * k, 1e-12);
+      EXPECT_NEAR(p.vertices[0].y, 3.0 * j, 1e-12);
+    }
+}
+
 TEST(MgfReader, ConvertsColoursReflectanceAndEmittance) {
   TempDir dir;
   const Scene s = read_test_scene(dir);

@@ -390,23 +390,38 @@ class MgfReader {
     fs::path file = t[1];
     if (file.is_relative()) file = path.parent_path() / file;
     if (!fs::exists(file)) refuse(fmt::format("included file '{}' not found", file.string()));
-    // Includes that include each other twice over read 2^depth files: bounded.
-    if (++includes_read_ > kMaxIncludeReads)
-      refuse(fmt::format("more than {} files read through 'i' (includes that fan out or loop?)", kMaxIncludeReads));
     const std::vector<std::string> args(t.begin() + 2, t.end());
-    if (!array_counts(args).empty()) fail("'-a' arrays are supported in 'xf', not in 'i'");
+    // The file is read once per element of its arrays ('-a', as in 'xf').
+    const std::vector<int> counts = array_counts(args);
+    double copies = 1;
+    for (const XfFrame& open : xf_)
+      for (int n : open.counts) copies *= n;
+    for (int n : counts) copies *= n;
+    if (copies > 1e7) refuse(fmt::format("nested '-a' arrays make {:.3g} copies (at most 1e7)", copies));
     const bool has_xf = !args.empty();
-    if (has_xf) {
-      XfFrame frame;
-      frame.total = transform().after(parse_transform(args, {}));
-      xf_.push_back(frame);
+    std::vector<int> index(counts.size(), 0);
+    for (;;) {
+      // Includes that include each other twice over read 2^depth files: bounded.
+      if (++includes_read_ > kMaxIncludeReads)
+        refuse(fmt::format("more than {} files read through 'i' (includes that fan out or loop?)", kMaxIncludeReads));
+      if (has_xf) {
+        XfFrame frame;
+        frame.total = transform().after(parse_transform(args, index));
+        xf_.push_back(frame);
+      }
+      const std::string saved_path = path_;
+      const long saved_line = line_;
+      read_file(file, depth + 1);
+      path_ = saved_path;
+      line_ = saved_line;
+      if (has_xf) xf_.pop_back();
+      int d = static_cast<int>(counts.size()) - 1;  // the next element, last array fastest
+      for (; d >= 0; --d) {
+        if (++index[static_cast<size_t>(d)] < counts[static_cast<size_t>(d)]) break;
+        index[static_cast<size_t>(d)] = 0;
+      }
+      if (d < 0) break;
     }
-    const std::string saved_path = path_;
-    const long saved_line = line_;
-    read_file(file, depth + 1);
-    path_ = saved_path;
-    line_ = saved_line;
-    if (has_xf) xf_.pop_back();
   }
 
   int current_object() {
