@@ -140,20 +140,13 @@ Poly2 cut_away(Poly2 rest, const Poly2& q, double width, std::vector<Poly2>& out
 // rectangles where x is one (the mesher grids rectangles, and would
 // triangulate wedges), then inside that rectangle by q's own edges. Empty
 // when x and q share no area (x stays whole).
-std::vector<Poly2> split_by(const Poly2& x, const Poly2& q, double width) {
-  const double q_side = signed_area(q) > 0 ? 1.0 : -1.0;
-  Poly2 inside = clip_inside(x, q, q_side);
+std::vector<Poly2> split_by(const Poly2& x, const Flat& q, double width) {
+  const double q_side = signed_area(q.points) > 0 ? 1.0 : -1.0;
+  Poly2 inside = clip_inside(x, q.points, q_side);
   if (!substantial(inside, width)) return {};
   std::vector<Poly2> out{std::move(inside)};
-  double lo_u = INFINITY, lo_v = INFINITY, hi_u = -INFINITY, hi_v = -INFINITY;
-  for (const P2& p : q) {
-    lo_u = std::min(lo_u, p.u);
-    lo_v = std::min(lo_v, p.v);
-    hi_u = std::max(hi_u, p.u);
-    hi_v = std::max(hi_v, p.v);
-  }
-  const Poly2 box{{lo_u, lo_v}, {hi_u, lo_v}, {hi_u, hi_v}, {lo_u, hi_v}};
-  cut_away(cut_away(x, box, width, out), q, width, out);
+  const Poly2 box{{q.lo_u, q.lo_v}, {q.hi_u, q.lo_v}, {q.hi_u, q.hi_v}, {q.lo_u, q.hi_v}};
+  cut_away(cut_away(x, box, width, out), q.points, width, out);
   return out;
 }
 
@@ -225,7 +218,7 @@ ContactSplit split_contacts(Scene& scene, double min_area, double min_share) {
     for (const size_t q : partners[k]) {
       std::vector<Poly2> next;
       for (const Poly2& x : pieces) {
-        auto parts = split_by(x, flats[q].points, plane_eps);
+        auto parts = split_by(x, flats[q], plane_eps);
         if (parts.empty()) next.push_back(x);
         for (auto& p : parts) next.push_back(std::move(p));
       }
