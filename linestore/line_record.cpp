@@ -1,5 +1,7 @@
 #include "line_record.h"
 
+#include <algorithm>
+
 #include "varint.h"
 
 namespace mpath::linestore {
@@ -59,6 +61,27 @@ void DecodedChunk::clear() {
   entry_ar.clear();
   exit_ar.clear();
   events.clear();
+}
+
+void gather_lines(const DecodedChunk& from, const uint32_t* order, size_t n, DecodedChunk& out) {
+  out.first.resize(n + 1);
+  out.entry_ar.resize(n);
+  out.exit_ar.resize(n);
+  // The lines' sizes first: loads independent of one another, which the core
+  // overlaps, where copying line after line would wait for each in turn.
+  out.first[0] = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const uint32_t l = order[k];
+    out.first[k + 1] = out.first[k] + (from.first[l + 1] - from.first[l]);
+    out.entry_ar[k] = from.entry_ar[l];
+    out.exit_ar[k] = from.exit_ar[l];
+  }
+  out.events.resize(out.first[n]);
+  for (size_t k = 0; k < n; ++k) {
+    const uint32_t l = order[k];
+    std::copy(from.events.begin() + from.first[l], from.events.begin() + from.first[l + 1],
+              out.events.begin() + out.first[k]);
+  }
 }
 
 namespace {

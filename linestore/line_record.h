@@ -60,6 +60,11 @@ struct DecodedChunk {
   void clear();
 };
 
+// Lines order[0 .. n) of `from`, in that order, into `out` (line k of `out`
+// is line order[k] of `from`): a pass then reads its lines' events one after
+// another in memory instead of jumping about a chunk of megabytes.
+void gather_lines(const DecodedChunk& from, const uint32_t* order, size_t n, DecodedChunk& out);
+
 // Decodes `lines` records from `data`; false if the bytes do not hold exactly that.
 bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, DecodedChunk& out);
 

@@ -76,7 +76,6 @@ PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const 
 // line like the one it came by (docs/algorithm.md, "Line order in a pass").
 void chunk_line_order(unsigned pass, int box, uint64_t chunk, size_t n, std::vector<uint32_t>& order);
 
-// Of a chunk, the lines a pass takes (the first of chunk_line_order).
 // Runs f(0) .. f(boxes - 1), the passes of the boxes of one depth: side by
 // side on the threads with one MPI rank; one after another with several,
 // since every rank must sum the boxes' accumulators in the same order, from
@@ -107,20 +106,29 @@ inline uint64_t part_lines(const std::vector<ChunkPart>& parts, uint64_t lo, uin
   return n;
 }
 
+// How many lines ahead of the one in transport stream_pass_lines announces
+// (`ahead(lines, k', d)`, d from kLinesAhead down to 1), so that a transport
+// can bring the memory a line will touch into the caches in stages while
+// earlier lines run: a pass reads per-face records chosen at random among a
+// box's faces, and waiting for each of them in turn was most of its time.
+inline constexpr size_t kLinesAhead = 4;
+
 // One shard's lines of a pass over box b: for each part in [lo, hi) its
 // chunk is read and checked (`check(chunk, c)`, which throws on a damaged
 // one), then the part's lines are taken in the pass's random order
 // (chunk_line_order; an adaptive pass takes the first of them, a random
-// subset of the chunk): `line(chunk, l)` for each. (Taking the chunk's first
+// subset of the chunk), gathered in that order (gather_lines) and run:
+// `line(lines, k)` for k = 0, 1, ..., after `ahead(lines, k + d, d)` for
+// the lines d = 1 .. kLinesAhead places after it. (Taking the chunk's first
 // lines instead, and decoding only them, raised the furnace error at rho
 // 0.99 by a fifth: every thin pass then met the same lines.)
-template <typename Check, typename Line>
+template <typename Check, typename Line, typename Ahead>
 void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart>& parts, uint64_t lo, uint64_t hi,
-                       unsigned pass, Progress& progress, const Check& check, const Line& line) {
-  // One decoded chunk and order per thread, kept from pass to pass: a chunk's
-  // buffers are megabytes, and allocating them afresh for every box of every
-  // pass cost page faults.
-  thread_local linestore::DecodedChunk chunk;
+                       unsigned pass, Progress& progress, const Check& check, const Line& line, const Ahead& ahead) {
+  // One decoded chunk, order and gathered lines per thread, kept from pass
+  // to pass: a chunk's buffers are megabytes, and allocating them afresh for
+  // every box of every pass cost page faults.
+  thread_local linestore::DecodedChunk chunk, lines;
   thread_local std::vector<uint32_t> order;
   for (uint64_t i = lo; i < hi; ++i) {
     const uint64_t c = parts[i].chunk;
@@ -129,9 +137,21 @@ void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart
     const size_t n = chunk.lines();
     const size_t take = std::min<size_t>(n, parts[i].lines);
     chunk_line_order(pass, b, c, n, order);
-    for (size_t k = 0; k < take; ++k) line(chunk, order[k]);
+    linestore::gather_lines(chunk, order.data(), take, lines);
+    for (size_t k = 0; k < take; ++k) {
+      for (size_t d = kLinesAhead; d >= 1; --d)
+        if (k + d < take) ahead(lines, static_cast<uint32_t>(k + d), d);
+      line(lines, static_cast<uint32_t>(k));
+    }
     progress.advance(take);
   }
+}
+
+template <typename Check, typename Line>
+void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart>& parts, uint64_t lo, uint64_t hi,
+                       unsigned pass, Progress& progress, const Check& check, const Line& line) {
+  stream_pass_lines(store, b, parts, lo, hi, pass, progress, check, line,
+                    [](const linestore::DecodedChunk&, uint32_t, size_t) {});
 }
 
 // One iteration: MP(root) and, depth by depth, MP of every box. Each box's

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <numeric>
 #include <random>
 
 #include "box_file.h"
@@ -91,6 +93,27 @@ TEST(LineStore, RoundTripsRandomLineRecords) {
     EXPECT_EQ(records(chunk), written[c]) << "chunk " << c;
   }
   EXPECT_FALSE(std::filesystem::exists(partial_path(dir / "box.lines")));
+}
+
+// A pass reads its lines gathered in its own order: line k of the gathered
+// chunk is line order[k] of the decoded one, events and ARs alike, for
+// orders that repeat no line, take a part of the chunk or none of it.
+TEST(LineStore, GatheringLinesKeepsEachLineWhole) {
+  TempDir dir;
+  const auto written = write_box(dir / "box.lines", 1, {1, 2, 3, 4});
+  BoxFileReader reader(dir / "box.lines");
+  DecodedChunk chunk, gathered;
+  reader.read_chunk(0, chunk);
+  std::mt19937 rng(7);
+  for (const size_t take : {size_t{0}, size_t{1}, size_t{317}, size_t{1000}}) {
+    std::vector<uint32_t> order(chunk.lines());
+    std::iota(order.begin(), order.end(), 0u);
+    std::shuffle(order.begin(), order.end(), rng);
+    gather_lines(chunk, order.data(), take, gathered);
+    ASSERT_EQ(gathered.lines(), take);
+    const auto lines = records(gathered);
+    for (size_t k = 0; k < take; ++k) EXPECT_EQ(lines[k], written[0][order[k]]) << "line " << k;
+  }
 }
 
 std::string open_error(const std::filesystem::path& path, int chunk = -1) {
