@@ -10,6 +10,7 @@
 #include "error.h"
 #include "first_shot.h"
 #include "line_sets.h"
+#include "prefetch.h"
 #include "progress.h"
 #include "sampling.h"
 
@@ -183,6 +184,25 @@ bool chunk_fits(const BoxInputs& in, const linestore::DecodedChunk& chunk) {
   return true;
 }
 
+// Brings into the caches what transport_box_line will touch at the patches
+// of a line `distance` lines ahead: the patches' faces (4 lines ahead), then
+// the faces' pass records (2), as prefetch_set_line does for line sets.
+void prefetch_box_line(const BoxInputs& in, const BoxShard& shard, const Event* ev, size_t n, size_t distance) {
+  const auto& local = in.box->local_faces;
+  if (distance == 4) {
+    for (size_t i = 0; i < n; ++i)
+      if (ev[i].kind == Event::patch) prefetch(&local[ev[i].id]);
+  } else if (distance == 2) {
+    for (size_t i = 0; i < n; ++i)
+      if (ev[i].kind == Event::patch)
+        for (const int face : local[ev[i].id])
+          if (face >= 0) {
+            prefetch(&in.faces[face]);
+            prefetch(&shard.faces.faces[face]);
+          }
+  }
+}
+
 // One line of the box in both directions (docs/method.md, 7): every face,
 // wall AR and child box on it sends before anything is received.
 // CH: the channel count (1 or 3), fixed at compile time so the per-channel
@@ -315,6 +335,9 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shar
           (ch == 1 ? transport_box_line<1> : transport_box_line<3>)(
               in, chunk.events.data() + chunk.first[l], chunk.first[l + 1] - chunk.first[l], chunk.entry_ar[l],
               chunk.exit_ar[l], a, allowance);
+        },
+        [&](const linestore::DecodedChunk& chunk, uint32_t l, size_t distance) {
+          prefetch_box_line(in, a, chunk.events.data() + chunk.first[l], chunk.first[l + 1] - chunk.first[l], distance);
         });
   });
   // Merge in shard order: faces, the box's Out, the children's In, and what
