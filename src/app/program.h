@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "atomic_file.h"
 #include "config.h"
 #include "config_keys.h"
 #include "error.h"
@@ -73,6 +74,7 @@ inline int parse_command_line(CLI::App& app, int argc, char** argv) {
 template <typename Body>
 int run_program(const char* name, const char* advice, const ProgramFlags& f, Body body) {
   install_interrupt_handlers(name, advice);
+  keep_freed_memory();
   spdlog::set_default_logger(spdlog::stderr_logger_mt("mpath"));
   spdlog::set_pattern("[%H:%M:%S] %^%l%$ %v");
   spdlog::set_level(f.quiet ? spdlog::level::warn : spdlog::level::from_str(f.log_level));
