@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "line_order.h"
+#include "prefetch.h"
 
 namespace mpath {
 
@@ -55,6 +56,11 @@ void ChunkTracer::count_classes(const std::vector<linestore::Event>& events, lin
   const int n = static_cast<int>(events.size());
   const auto depth = [&](int x) { return hierarchy_.boxes[x].depth; };
   const auto common = [&](int x, int y) { return hierarchy_.common_box(x, y); };
+  // The counters a line adds to are first found and brought into the caches,
+  // then added to: added to as found, each waited for the one before
+  // (the counters of a box's patches are megabytes, met at random).
+  thread_local std::vector<uint32_t*> counters;
+  counters.clear();
   for (int i = 0; i < n; ++i)
     for (const int dir : {+1, -1}) {
       const int j = next_seen(i, dir, n, [&](int x, int d) { return towards(events[x], d); });
@@ -62,8 +68,11 @@ void ChunkTracer::count_classes(const std::vector<linestore::Event>& events, lin
                                depth, common);
       if (k < 0) continue;
       const int side = (dir > 0) == events[i].along ? 0 : 1;
-      counts.class_crossings[(size_t{events[i].id} * 2 + side) * class_span_ + static_cast<size_t>(k)]++;
+      uint32_t* c = &counts.class_crossings[(size_t{events[i].id} * 2 + side) * class_span_ + static_cast<size_t>(k)];
+      prefetch(c);
+      counters.push_back(c);
     }
+  for (uint32_t* c : counters) ++*c;
 }
 
 void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const {
