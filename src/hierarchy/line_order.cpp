@@ -16,13 +16,14 @@ struct GroupOrder {
 
 constexpr size_t kMaxTieGroup = 5;
 
-std::vector<GroupOrder> group_orders(const PatchMesh& mesh, const std::vector<LineHit>& hits, size_t lo, size_t n) {
+// Appends the orders of the group of n crossings from lo to `out`.
+void group_orders(const PatchMesh& mesh, const std::vector<LineHit>& hits, size_t lo, size_t n,
+                  std::vector<GroupOrder>& out) {
   std::array<uint8_t, 5> perm{};
   for (size_t k = 0; k < n; ++k) perm[k] = static_cast<uint8_t>(k);
   // Start from the order of patch indices so that ties between equal costs
   // resolve the same way whatever order Embree reported the hits in.
   std::sort(perm.begin(), perm.begin() + n, [&](uint8_t a, uint8_t b) { return hits[lo + a].patch < hits[lo + b].patch; });
-  std::vector<GroupOrder> out;
   do {
     GroupOrder g;
     g.perm = perm;
@@ -34,7 +35,6 @@ std::vector<GroupOrder> group_orders(const PatchMesh& mesh, const std::vector<Li
   } while (n > 1 && std::next_permutation(perm.begin(), perm.begin() + n, [&](uint8_t a, uint8_t b) {
     return hits[lo + a].patch < hits[lo + b].patch;
   }));
-  return out;
 }
 
 }  // namespace
@@ -59,25 +59,31 @@ void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hit
   constexpr int kInf = 1 << 29;
   struct Cell {
     int cost = kInf;
-    int order = -1;       // index into the group's orders
+    int order = -1;       // index into `orders`
     int previous = 0;     // state before this group
   };
-  std::vector<std::vector<GroupOrder>> orders(groups.size());
-  std::vector<std::array<Cell, 2>> dp(groups.size());
+  // Every group's orders in one list (group g's from first[g]), kept with the
+  // table from line to line: allocating them afresh for every line with a
+  // tie was a tenth of the preprocess's time, in malloc.
+  thread_local std::vector<GroupOrder> orders;
+  thread_local std::vector<std::array<Cell, 2>> dp;
+  orders.clear();
+  dp.assign(groups.size(), {});
   std::array<int, 2> before{0, kInf};
   for (size_t g = 0; g < groups.size(); ++g) {
     const auto [lo, n] = groups[g];
+    const size_t first = orders.size();
     if (n <= kMaxTieGroup) {
-      orders[g] = group_orders(mesh, hits, lo, n);
+      group_orders(mesh, hits, lo, n, orders);
     } else {  // too many to permute: keep the reported order
       GroupOrder keep;
       for (size_t k = 0; k < kMaxTieGroup; ++k) keep.perm[k] = static_cast<uint8_t>(k);
       keep.first_back_live = facing(mesh, hits[lo]).backward >= 0;
       keep.last_forward_live = facing(mesh, hits[lo + n - 1]).forward >= 0;
-      orders[g] = {keep};
+      orders.push_back(keep);
     }
-    for (size_t o = 0; o < orders[g].size(); ++o) {
-      const GroupOrder& go = orders[g][o];
+    for (size_t o = first; o < orders.size(); ++o) {
+      const GroupOrder& go = orders[o];
       for (int s = 0; s < 2; ++s) {
         if (before[s] >= kInf) continue;
         const int cost = before[s] + (s != static_cast<int>(go.first_back_live)) + go.inner;
@@ -94,7 +100,7 @@ void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hit
     const auto [lo, n] = groups[g];
     if (n > 1 && n <= kMaxTieGroup) {
       scratch.assign(hits.begin() + lo, hits.begin() + lo + n);
-      for (size_t k = 0; k < n; ++k) hits[lo + k] = scratch[orders[g][cell.order].perm[k]];
+      for (size_t k = 0; k < n; ++k) hits[lo + k] = scratch[orders[static_cast<size_t>(cell.order)].perm[k]];
     }
     state = cell.previous;
   }
