@@ -147,13 +147,6 @@ void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart
   }
 }
 
-template <typename Check, typename Line>
-void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart>& parts, uint64_t lo, uint64_t hi,
-                       unsigned pass, Progress& progress, const Check& check, const Line& line) {
-  stream_pass_lines(store, b, parts, lo, hi, pass, progress, check, line,
-                    [](const linestore::DecodedChunk&, uint32_t, size_t) {});
-}
-
 // One iteration: MP(root) and, depth by depth, MP of every box. Each box's
 // pass takes every line of the box (exact crossing counts) when
 // `power_per_line` is 0; otherwise as many as carry about that power each

@@ -172,7 +172,7 @@ static_assert(sizeof(EntryAcc) == 2 * sizeof(double) && sizeof(FaceAcc) == 6 * s
 struct alignas(128) SetShard {
   std::vector<EntryAcc> entries;
   std::vector<FaceAcc> faces;
-  std::vector<FaceLater> later;  // empty in the root's pass, above which no class waits
+  std::vector<FaceLater> later;  // empty where no face's classes wait for a box above (the root's pass)
   std::array<double, 3> absorbed{}, escaped{};
   uint64_t lines = 0, hits = 0;
   struct Send {
@@ -370,6 +370,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
       expected[e] = flight.fraction[x] * lines.carried[e] * flight.share[lines.slot[e]];
   }
   in.faces.resize(faces);
+  bool waits = false;  // some face keeps a part of what it receives for the classes of boxes above
   for (size_t f = 0; f < faces; ++f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
     FaceIn& face = in.faces[f];
@@ -382,6 +383,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
       for (uint32_t k = 0; k < carried; ++k) share += sets.alpha[sets.face_slot[g] + k];
     }
     face.signed_share = static_cast<float>(carried == 1 ? -share : share);
+    waits |= face.carried_share() < 1;
   }
   const uint64_t chunks = parts.size();
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
@@ -391,7 +393,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     SetShard& a = acc[s];
     a.entries.assign(entries, EntryAcc{});
     a.faces.assign(faces, FaceAcc{});
-    a.later.assign(in.root ? 0 : faces, FaceLater{});
+    a.later.assign(waits ? faces : 0, FaceLater{});
     if (in.capped) {
       const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
       const double allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
