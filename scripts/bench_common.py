@@ -1,6 +1,10 @@
 """What the benchmark drivers (scripts/bench_*.py) share."""
 import csv
 import os
+import resource
+import subprocess
+import sys
+import time
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 
@@ -12,3 +16,18 @@ def write_csv(name, rows):
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
+
+
+def timed(cmds, env=None):
+    """Runs the commands side by side; (wall s, CPU s of all of them). Exits
+    naming the command and its error when one fails."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.monotonic()
+    procs = [subprocess.Popen(c, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True) for c in cmds]
+    for p, c in zip(procs, cmds):
+        _, err = p.communicate()
+        if p.returncode != 0:
+            sys.exit("failed: %s\n%s" % (" ".join(c), err[-2000:]))
+    wall = time.monotonic() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)

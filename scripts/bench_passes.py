@@ -2,14 +2,12 @@
 """Driver of scripts/bench-passes."""
 import json
 import os
-import resource
 import statistics
 import subprocess
 import sys
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, write_csv  # noqa: E402
+from bench_common import ROOT, timed, write_csv  # noqa: E402
 
 SCENES = ["configs/office.toml", "configs/room.toml"]
 METHODS = ["hierarchical", "multipath"]
@@ -21,15 +19,9 @@ def git_commit(build):
 
 
 def solve(build, config, common, out):
-    """One solve; its report and the process's CPU seconds."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.monotonic()
-    subprocess.run([os.path.join(build, "bin/mpath-solve"), config, "-q", f"output.dir={out}", "output.exr=false",
-                    "output.png=false"] + common, check=True, stdout=subprocess.DEVNULL,
-                   stderr=subprocess.DEVNULL)
-    wall = time.monotonic() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    """One solve; its report, and the process's CPU and wall seconds."""
+    wall, cpu = timed([[os.path.join(build, "bin/mpath-solve"), config, "-q", f"output.dir={out}",
+                        "output.exr=false", "output.png=false"] + common])
     return json.load(open(os.path.join(out, "report.json"))), cpu, wall
 
 

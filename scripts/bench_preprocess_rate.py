@@ -5,14 +5,13 @@ scene, as in the trace benchmark), added to the trace benchmark's record of
 that scene with its share of Embree's raw all-hit rate."""
 import json
 import os
-import resource
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 
-ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_common import ROOT, timed  # noqa: E402
 
 
 def main(config, record_path, lines, repeats=3):
@@ -22,14 +21,8 @@ def main(config, record_path, lines, repeats=3):
         store = os.path.join(work, "store")
         for _ in range(repeats):
             subprocess.run(["rm", "-rf", store], check=True)
-            before = resource.getrusage(resource.RUSAGE_CHILDREN)
-            start = time.monotonic()
-            subprocess.run([os.path.join(ROOT, "build/bin/mpath-preprocess"), config, "-q", f"lines.total={lines}",
-                            "hierarchy.max_depth=0", f"store.dir={store}"], check=True,
-                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-            wall = time.monotonic() - start
-            after = resource.getrusage(resource.RUSAGE_CHILDREN)
-            cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+            wall, cpu = timed([[os.path.join(ROOT, "build/bin/mpath-preprocess"), config, "-q",
+                                f"lines.total={lines}", "hierarchy.max_depth=0", f"store.dir={store}"]])
             stats = json.load(open(os.path.join(store, "preprocess.json")))
             # The box's own time: tracing, encoding, compressing and writing its
             # file (not loading, meshing or the BVH, which the trace benchmark

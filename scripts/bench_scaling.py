@@ -14,32 +14,15 @@ usage: bench_scaling.py WORK [--lines 8000000] [--iterations 6]
 import argparse
 import json
 import os
-import resource
 import shutil
-import subprocess
 import sys
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, write_csv  # noqa: E402
+from bench_common import ROOT, timed, write_csv  # noqa: E402
 
 BIN = os.path.join(ROOT, "build", "bin")
 CONFIG = os.path.join(ROOT, "configs", "office.toml")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-
-
-def timed(cmds):
-    """Runs the commands side by side; (wall s, CPU s of all of them)."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t0 = time.monotonic()
-    procs = [subprocess.Popen(c, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True) for c in cmds]
-    for p, c in zip(procs, cmds):
-        _, err = p.communicate()
-        if p.returncode != 0:
-            sys.exit("failed: %s\n%s" % (" ".join(c), err[-2000:]))
-    wall = time.monotonic() - t0
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def main():
@@ -58,7 +41,7 @@ def main():
             ("1 process, 2 threads", [pre + ["solver.threads=2", "store.dir=" + os.path.join(args.work, "p2")]]),
             ("2 shards of 1 thread", [pre + ["solver.threads=1", "store.dir=" + os.path.join(args.work, "ps"),
                                              "--shard", "%d/2" % i] for i in (1, 2)])):
-        wall, cpu = timed(cmds)
+        wall, cpu = timed(cmds, ENV)
         rows.append({"stage": "preprocess", "layout": name, "wall_s": round(wall, 3), "cpu_s": round(cpu, 3),
                      "lines_per_wall_s": round(args.lines / wall)})
         print("preprocess, %-22s %7.2f s wall %7.2f CPU s" % (name, wall, cpu), flush=True)
@@ -75,7 +58,7 @@ def main():
         cmd = solve + ["solver.threads=%d" % threads, "output.dir=" + out]
         if ranks > 1:
             cmd = ["mpirun", "-np", str(ranks), "--oversubscribe"] + cmd
-        wall, cpu = timed([cmd])
+        wall, cpu = timed([cmd], ENV)
         report = json.load(open(os.path.join(out, "report.json")))
         iterations = report["timings"]["iterations"]
         solutions[name] = open(os.path.join(out, "solution.ply"), "rb").read()
