@@ -268,6 +268,9 @@ case("MGF arrays", "nested 'xf -a' arrays make", files=dict(
 case("MGF include arrays", "nested '-a' arrays make", files=dict(
     mgf, **{"s.mgf": MGF_HEAD + "xf -a 10000 -t 1 0 0\ni x.mgf -a 10000 -t 0 1 0\nxf\n",
             "x.mgf": "f a b c\n"}), over=over_mgf)
+case("MGF arrays in an include array", "nested 'xf -a' arrays make", files=dict(
+    mgf, **{"s.mgf": MGF_HEAD + "i x.mgf -a 10000 -t 0 1 0\n",
+            "x.mgf": "xf -a 10000 -t 1 0 0\nf a b c\nxf\n"}), over=over_mgf)
 case("MGF objects", "objects nested more than 256 deep", files=dict(
     mgf, **{"s.mgf": MGF_HEAD + "o x\n" * 300}), over=over_mgf)
 # A skipped line is a warning; a scene of nothing but such lines names the

@@ -297,29 +297,40 @@ class MgfReader {
       frame.file = file_;
       frame.counts = array_counts(frame.args);
       frame.index.assign(frame.counts.size(), 0);
-      // Nested arrays multiply: refuse a bomb before running its body.
-      double copies = 1;
-      for (const XfFrame& open : xf_)
-        for (int n : open.counts) copies *= n;
-      for (int n : frame.counts) copies *= n;
-      if (copies > 1e7) refuse(fmt::format("nested 'xf -a' arrays make {:.3g} copies (at most 1e7)", copies));
+      refuse_array_bomb(frame.counts, "'xf -a'");
       frame.total = transform().after(parse_transform(frame.args, frame.index));
       xf_.push_back(std::move(frame));
       return i;
     }
     if (xf_.empty() || xf_.back().file != file_) fail("'xf' end without a matching 'xf' in this file");
     XfFrame& f = xf_.back();
-    // Advance the array odometer, last array fastest.
-    for (int d = static_cast<int>(f.counts.size()) - 1; d >= 0; --d) {
-      if (++f.index[d] < f.counts[d]) {
-        const Transform outer = xf_.size() > 1 ? xf_[xf_.size() - 2].total : identity_;
-        f.total = outer.after(parse_transform(f.args, f.index));
-        return f.body_start - 1;
-      }
-      f.index[d] = 0;
+    if (next_element(f.index, f.counts)) {
+      const Transform outer = xf_.size() > 1 ? xf_[xf_.size() - 2].total : identity_;
+      f.total = outer.after(parse_transform(f.args, f.index));
+      return f.body_start - 1;
     }
     xf_.pop_back();
     return i;
+  }
+
+  // Nested arrays multiply, those of the open 'xf' contexts and includes with
+  // `counts`: a bomb is refused before its body runs.
+  void refuse_array_bomb(const std::vector<int>& counts, const char* what) const {
+    double copies = 1;
+    for (const XfFrame& open : xf_)
+      for (int n : open.counts) copies *= n;
+    for (int n : counts) copies *= n;
+    if (copies > 1e7) refuse(fmt::format("nested {} arrays make {:.3g} copies (at most 1e7)", what, copies));
+  }
+
+  // Advances an array odometer to its next element, the last array fastest;
+  // false (and all back at 0) after the last element.
+  static bool next_element(std::vector<int>& index, const std::vector<int>& counts) {
+    for (size_t d = counts.size(); d-- > 0;) {
+      if (++index[d] < counts[d]) return true;
+      index[d] = 0;
+    }
+    return false;
   }
 
   std::vector<int> array_counts(const std::vector<std::string>& args) const {
@@ -393,20 +404,17 @@ class MgfReader {
     const std::vector<std::string> args(t.begin() + 2, t.end());
     // The file is read once per element of its arrays ('-a', as in 'xf').
     const std::vector<int> counts = array_counts(args);
-    double copies = 1;
-    for (const XfFrame& open : xf_)
-      for (int n : open.counts) copies *= n;
-    for (int n : counts) copies *= n;
-    if (copies > 1e7) refuse(fmt::format("nested '-a' arrays make {:.3g} copies (at most 1e7)", copies));
+    refuse_array_bomb(counts, "'-a'");
     const bool has_xf = !args.empty();
     std::vector<int> index(counts.size(), 0);
-    for (;;) {
+    do {
       // Includes that include each other twice over read 2^depth files: bounded.
       if (++includes_read_ > kMaxIncludeReads)
         refuse(fmt::format("more than {} files read through 'i' (includes that fan out or loop?)", kMaxIncludeReads));
       if (has_xf) {
         XfFrame frame;
         frame.total = transform().after(parse_transform(args, index));
+        frame.counts = counts;  // arrays nested in the file multiply with this one's
         xf_.push_back(frame);
       }
       const std::string saved_path = path_;
@@ -415,13 +423,7 @@ class MgfReader {
       path_ = saved_path;
       line_ = saved_line;
       if (has_xf) xf_.pop_back();
-      int d = static_cast<int>(counts.size()) - 1;  // the next element, last array fastest
-      for (; d >= 0; --d) {
-        if (++index[static_cast<size_t>(d)] < counts[static_cast<size_t>(d)]) break;
-        index[static_cast<size_t>(d)] = 0;
-      }
-      if (d < 0) break;
-    }
+    } while (next_element(index, counts));
   }
 
   int current_object() {
