@@ -38,7 +38,6 @@ ChunkTracer::ChunkTracer(const Options& options, const PatchMesh& mesh, const Hi
   class_span_ = hierarchy.class_span(box);
   if (class_span_ > 0)
     for (int p : box_.patches) owner_.push_back(hierarchy.patch_box[static_cast<size_t>(p)]);
-  for (int p : box_.patches) invisible_ |= mesh.patch_faces[static_cast<size_t>(p)][1] == kInvisibleSide;
 }
 
 uint64_t ChunkTracer::lines_in(uint64_t chunk) const { return std::min(chunk_lines_, total_ - first_line(chunk)); }
@@ -65,7 +64,9 @@ void ChunkTracer::count_classes(const std::vector<linestore::Event>& events, lin
   for (int i = 0; i < n; ++i)
     for (const int dir : {+1, -1}) {
       // Without invisible backs in the box the next crossing seen is the next one.
-      const int j = invisible_ ? next_seen(i, dir, n, [&](int x, int d) { return towards(events[x], d); }) : i + dir;
+      const int j = tracer_.any_invisible()
+                        ? next_seen(i, dir, n, [&](int x, int d) { return towards(events[x], d); })
+                        : i + dir;
       const int k = pair_class(owner_[events[i].id], j < 0 || j >= n ? -1 : owner_[events[j].id], box_index_ == 0,
                                depth, common);
       if (k < 0) continue;

@@ -58,7 +58,6 @@ class ChunkTracer {
   uint64_t total_, chunk_lines_, chunks_;
   std::vector<uint32_t> child_offset_;  // first AR of each child in the child-crossing counts
   int class_span_ = 0;                  // transparent boxes: classes counted per patch side
-  bool invisible_ = false;              // some patch of the box has an invisible back
   std::vector<int> owner_;              // transparent boxes: per patch of the box, the box holding it
 };
 

@@ -62,8 +62,8 @@ void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hit
     int order = -1;       // index into `orders`
     int previous = 0;     // state before this group
   };
-  // Every group's orders in one list (group g's from first[g]), kept with the
-  // table from line to line: allocating them afresh for every line with a
+  // Every group's orders in one list (each group's after the one before),
+  // kept with the table from line to line: allocating them afresh for every line with a
   // tie was a tenth of the preprocess's time, in malloc.
   thread_local std::vector<GroupOrder> orders;
   thread_local std::vector<std::array<Cell, 2>> dp;

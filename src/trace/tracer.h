@@ -46,6 +46,8 @@ class Tracer {
   static std::string embree_version();
   // Crossings closer than this along a line are at one distance (surfaces in contact).
   double tie_epsilon() const { return tie_epsilon_; }
+  // Whether some traced patch has an invisible back (docs/scene-formats.md, "Sides").
+  bool any_invisible() const { return any_invisible_; }
 
   // The Embree scene, for benchmarks that measure Embree alone.
   RTCScene embree_scene() const { return scene_; }
