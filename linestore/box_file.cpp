@@ -10,6 +10,7 @@
 #include "error.h"
 #include "hash.h"
 #include "varint.h"
+#include "zstd_frame.h"
 
 namespace mpath::linestore {
 
@@ -23,25 +24,6 @@ constexpr char kMagic[8] = {'M', 'P', 'L', 'I', 'N', 'E', 'S', '\0'};
 constexpr char kEndMagic[8] = {'M', 'P', 'L', 'S', 'E', 'N', 'D', '\0'};
 constexpr size_t kHeaderBytes = 16, kFooterBytes = 40;
 constexpr uint64_t kMaxChunkBytes = 1ull << 30;
-
-std::string compress(const std::string& raw, int level) {
-  // One compression context per thread, kept: making one per chunk costs
-  // its tables' allocation every time.
-  struct Context {
-    ZSTD_CCtx* cctx = ZSTD_createCCtx();
-    ~Context() { ZSTD_freeCCtx(cctx); }
-  };
-  thread_local Context context;
-  ZSTD_CCtx* cctx = context.cctx;
-  ZSTD_CCtx_reset(cctx, ZSTD_reset_session_and_parameters);
-  ZSTD_CCtx_setParameter(cctx, ZSTD_c_compressionLevel, level);
-  ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
-  thread_local std::vector<char> buffer;  // no zero-filling of a fresh bound-sized string per chunk
-  buffer.resize(std::max(buffer.size(), ZSTD_compressBound(raw.size())));
-  const size_t n = ZSTD_compress2(cctx, buffer.data(), buffer.size(), raw.data(), raw.size());
-  if (ZSTD_isError(n)) throw InputError(fmt::format("zstd compression failed: {}", ZSTD_getErrorName(n)));
-  return std::string(buffer.data(), n);
-}
 
 template <typename T>
 void append(std::string& s, T v) {
@@ -74,7 +56,7 @@ std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events)
 
 EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_t lines, uint64_t events, int level) {
   EncodedChunk c;
-  c.frame = compress(raw, level);
+  c.frame = zstd_compress(raw, level, true);
   c.info = {0, c.frame.size(), raw.size(), first_line, lines, events};
   return c;
 }
@@ -174,7 +156,7 @@ void BoxFileWriter::finish(const BoxCounts& box_counts) {
   for (const auto* a : arrays) put_varint(counts_raw, a->size());
   for (const auto* a : arrays)
     for (uint32_t c : *a) put_varint(counts_raw, c);
-  const std::string counts = compress(counts_raw, 3);
+  const std::string counts = zstd_compress(counts_raw, 3, true);
   const uint64_t counts_offset = offset_;
   put(counts.data(), counts.size());
 

@@ -15,8 +15,9 @@
 
 namespace mpath::linestore {
 
-// 3: manifest file hashes by block_hash; 4: class crossings of transparent boxes
-inline constexpr uint32_t kFormatVersion = 4;
+// 3: manifest file hashes by block_hash; 4: class crossings of transparent
+// boxes; 5: an event's id after a line's first as a step from the one before
+inline constexpr uint32_t kFormatVersion = 5;
 
 // What a box file's lines tell about its box, besides the lines themselves
 // (docs/method.md, 6), all counted from the file's lines.

@@ -39,13 +39,18 @@ class ChunkEncoder {
   explicit ChunkEncoder(size_t lines = 0) {
     lines_.reserve(lines * 2);
     events_.reserve(lines * 8);
+    steps_.reserve(lines * 8);
   }
   void add(const LineRecord& line);
   uint64_t events() const { return event_count_; }
+  // The chunk, its later events' ids plain or as steps, whichever zstd
+  // makes smaller (docs/store-format.md).
   std::string finish();
 
  private:
-  std::string lines_, events_;
+  std::string lines_;
+  std::string events_;  // later events' ids plain
+  std::string steps_;   // later events' ids as steps from the id before
   uint64_t previous_first_ = 0;
   uint64_t event_count_ = 0;
 };

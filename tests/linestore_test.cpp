@@ -12,6 +12,7 @@
 #include <cstring>
 #include "manifest.h"
 #include "test_util.h"
+#include "varint.h"
 
 namespace mpath::linestore {
 namespace {
@@ -93,6 +94,61 @@ TEST(LineStore, RoundTripsRandomLineRecords) {
     EXPECT_EQ(records(chunk), written[c]) << "chunk " << c;
   }
   EXPECT_FALSE(std::filesystem::exists(partial_path(dir / "box.lines")));
+}
+
+// Events after a line's first are stored as plain ids or as steps from the
+// id before them, whichever compresses better. The largest and smallest ids
+// follow each other both ways and round-trip; lines whose crossings are of
+// patches numbered together are stored as steps; a step that leads below 0
+// or above the largest id is refused, not wrapped.
+TEST(LineStore, IdStepsRoundTripAtTheEndsOfTheRangeAndRefuseLeavingIt) {
+  const auto decode = [](const std::string& raw, uint64_t lines, DecodedChunk& out) {
+    return decode_chunk(reinterpret_cast<const unsigned char*>(raw.data()), raw.size(), lines, out);
+  };
+  const uint32_t top = 0xFFFFFFFFu;
+  LineRecord line;
+  for (const uint32_t id : {top, 0u, top, 5u, 4u, top - 1, 0u})
+    line.events.push_back({Event::patch, id, id % 2 == 0});
+  LineRecord child = line;
+  child.events[2] = {Event::child_box, top, false, 7, kNoAr};
+  ChunkEncoder encoder(2);
+  encoder.add(line);
+  encoder.add(child);
+  DecodedChunk chunk;
+  ASSERT_TRUE(decode(encoder.finish(), 2, chunk));
+  EXPECT_EQ(records(chunk), (std::vector<LineRecord>{line, child}));
+
+  // Lines of 2-6 crossings of neighbouring patches among a million.
+  std::mt19937 rng(3);
+  std::vector<LineRecord> runs(2000);
+  ChunkEncoder run_encoder(runs.size());
+  for (LineRecord& l : runs) {
+    uint32_t id = std::uniform_int_distribution<uint32_t>(0, 1'000'000)(rng);
+    for (int k = std::uniform_int_distribution<int>(2, 6)(rng); k > 0; --k)
+      l.events.push_back({Event::patch, id += std::uniform_int_distribution<uint32_t>(1, 3)(rng), k % 2 == 0});
+    run_encoder.add(l);
+  }
+  const std::string raw = run_encoder.finish();
+  EXPECT_EQ(raw[0] & 1, 1) << "stored as steps";
+  ASSERT_TRUE(decode(raw, runs.size(), chunk));
+  EXPECT_EQ(records(chunk), runs);
+
+  // One line of two events: id 3, then as a step -3 (zigzag 5: id 0, read),
+  // -4 (zigzag 7) or +2^32 (both refused); read plain, each is an id.
+  for (const bool steps : {true, false}) {
+    for (const uint64_t second : {uint64_t{5}, uint64_t{7}, uint64_t{1} << 33}) {
+      std::string one;
+      put_varint(one, 1 << 1 | (steps ? 1 : 0));  // a line stream of one byte
+      put_varint(one, 2 << 1);                    // two events, no ARs
+      put_varint(one, 2 * (3 << 2));              // first event: id 3, zigzag from 0
+      put_varint(one, second << 2);
+      const bool read = decode(one, 1, chunk);
+      EXPECT_EQ(read, steps ? second == 5 : second <= top) << "steps " << steps << ", second " << second;
+      if (read) {
+        EXPECT_EQ(chunk.events[1].id, steps ? 0u : second);
+      }
+    }
+  }
 }
 
 // A pass reads its lines gathered in its own order: line k of the gathered
