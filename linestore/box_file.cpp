@@ -9,6 +9,7 @@
 
 #include "error.h"
 #include "hash.h"
+#include "prefetch.h"
 #include "varint.h"
 #include "zstd_frame.h"
 
@@ -49,7 +50,14 @@ fs::path partial_path(const fs::path& path) {
 
 std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events) {
   ChunkEncoder encoder(lines.size());
-  for (const LineRecord& l : lines) encoder.add(l);
+  // Each line's events are a block of their own, and the lines were sorted
+  // after tracing: without announcing them a few lines ahead, reading them
+  // waited on memory for most of the encoding's time.
+  constexpr size_t kAhead = 8;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    if (i + kAhead < lines.size() && !lines[i + kAhead].events.empty()) prefetch(lines[i + kAhead].events.data());
+    encoder.add(lines[i]);
+  }
   events = encoder.events();
   return encoder.finish();
 }
