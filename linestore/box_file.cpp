@@ -9,7 +9,6 @@
 
 #include "error.h"
 #include "hash.h"
-#include "prefetch.h"
 #include "varint.h"
 #include "zstd_frame.h"
 
@@ -50,14 +49,15 @@ fs::path partial_path(const fs::path& path) {
 
 std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events) {
   ChunkEncoder encoder(lines.size());
-  // Each line's events are a block of their own, and the lines were sorted
-  // after tracing: without announcing them a few lines ahead, reading them
-  // waited on memory for most of the encoding's time.
-  constexpr size_t kAhead = 8;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    if (i + kAhead < lines.size() && !lines[i + kAhead].events.empty()) prefetch(lines[i + kAhead].events.data());
-    encoder.add(lines[i]);
-  }
+  for (const LineRecord& l : lines) encoder.add(l);
+  events = encoder.events();
+  return encoder.finish();
+}
+
+std::string encode_lines(const DecodedChunk& lines, uint64_t& events) {
+  ChunkEncoder encoder(lines.lines());
+  for (size_t i = 0; i < lines.lines(); ++i)
+    encoder.add(lines.entry_ar[i], lines.exit_ar[i], lines.events.data() + lines.first[i], lines.first[i + 1] - lines.first[i]);
   events = encoder.events();
   return encoder.finish();
 }

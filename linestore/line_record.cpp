@@ -1,5 +1,6 @@
 #include "line_record.h"
 
+#include "prefetch.h"
 #include "varint.h"
 #include "zstd_frame.h"
 
@@ -25,15 +26,15 @@ int64_t unzigzag(uint64_t v) { return static_cast<int64_t>(v >> 1) ^ -static_cas
 // zigzag delta from the id before it on its line (varint(zigzag(id -
 // previous id) << 2 | kind << 1 | along)); a child box adds varint(entry +
 // 1), varint(exit + 1).
-void ChunkEncoder::add(const LineRecord& line) {
-  const bool has_ars = line.entry_ar != kNoAr || line.exit_ar != kNoAr;
-  put_varint(lines_, (static_cast<uint64_t>(line.events.size()) << 1) | (has_ars ? 1 : 0));
+void ChunkEncoder::add(uint32_t entry_ar, uint32_t exit_ar, const Event* events, size_t count) {
+  const bool has_ars = entry_ar != kNoAr || exit_ar != kNoAr;
+  put_varint(lines_, (static_cast<uint64_t>(count) << 1) | (has_ars ? 1 : 0));
   if (has_ars) {
-    put_varint(lines_, ar_code(line.entry_ar));
-    put_varint(lines_, ar_code(line.exit_ar));
+    put_varint(lines_, ar_code(entry_ar));
+    put_varint(lines_, ar_code(exit_ar));
   }
-  for (size_t k = 0; k < line.events.size(); ++k) {
-    const Event& e = line.events[k];
+  for (size_t k = 0; k < count; ++k) {
+    const Event& e = events[k];
     const uint64_t code = event_code(e);
     if (k == 0) {
       const uint64_t delta = zigzag(static_cast<int64_t>(code) - static_cast<int64_t>(previous_first_));
@@ -42,7 +43,7 @@ void ChunkEncoder::add(const LineRecord& line) {
       previous_first_ = code;
     } else {
       put_varint(events_, code);
-      const int64_t step = static_cast<int64_t>(e.id) - static_cast<int64_t>(line.events[k - 1].id);
+      const int64_t step = static_cast<int64_t>(e.id) - static_cast<int64_t>(events[k - 1].id);
       put_varint(steps_, (zigzag(step) << 2) | (code & 3));
     }
     if (e.kind == Event::child_box) {
@@ -52,7 +53,7 @@ void ChunkEncoder::add(const LineRecord& line) {
       }
     }
   }
-  event_count_ += line.events.size();
+  event_count_ += count;
 }
 
 std::string ChunkEncoder::finish() {
@@ -93,9 +94,13 @@ void gather_lines(const DecodedChunk& from, const uint32_t* order, size_t n, Dec
     out.exit_ar[k] = from.exit_ar[l];
   }
   out.events.resize(out.first[n]);
-  // Lines are a few events long: a plain loop, not a call to memmove per line.
+  // Lines are a few events long: a plain loop, not a call to memmove per
+  // line. Their events are announced a few lines ahead: they lie at random
+  // in a chunk of megabytes.
+  constexpr size_t kAhead = 8;
   Event* to = out.events.data();
   for (size_t k = 0; k < n; ++k) {
+    if (k + kAhead < n) prefetch(from.events.data() + from.first[order[k + kAhead]]);
     const uint32_t l = order[k];
     for (uint32_t e = from.first[l]; e < from.first[l + 1]; ++e) *to++ = from.events[e];
   }

@@ -41,7 +41,8 @@ class ChunkEncoder {
     events_.reserve(lines * 8);
     steps_.reserve(lines * 8);
   }
-  void add(const LineRecord& line);
+  void add(const LineRecord& line) { add(line.entry_ar, line.exit_ar, line.events.data(), line.events.size()); }
+  void add(uint32_t entry_ar, uint32_t exit_ar, const Event* events, size_t count);
   uint64_t events() const { return event_count_; }
   // The chunk, its later events' ids plain or as steps, whichever zstd
   // makes smaller (docs/store-format.md).

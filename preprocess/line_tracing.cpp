@@ -48,12 +48,11 @@ BoxTally ChunkTracer::empty_tally() const {
   return t;
 }
 
-void ChunkTracer::count_classes(const std::vector<linestore::Event>& events, linestore::BoxCounts& counts) const {
+void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore::BoxCounts& counts) const {
   // The pair of crossing i and the next it sees towards dir (next_seen) belongs to the smallest box holding
   // both patches (off the line: the outside, the root's); a subscene's line
   // leaving it carries no pair. Counted on the side of patch i that faces
   // crossing i + dir, as the solver's face_towards picks it.
-  const int n = static_cast<int>(events.size());
   const auto depth = [&](int x) { return hierarchy_.boxes[x].depth; };
   const auto common = [&](int x, int y) { return hierarchy_.common_box(x, y); };
   // The counters a line adds to are first found and brought into the caches,
@@ -78,7 +77,7 @@ void ChunkTracer::count_classes(const std::vector<linestore::Event>& events, lin
   for (uint32_t* c : counters) ++*c;
 }
 
-void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const {
+void ChunkTracer::trace(uint64_t chunk, linestore::DecodedChunk& out, BoxTally& tally) const {
   using linestore::Event;
   Rng rng = make_rng(seed_, kStoreLineStream, (static_cast<unsigned long long>(box_index_) << 40) + chunk);
   const uint64_t first = first_line(chunk), n = lines_in(chunk);
@@ -87,12 +86,16 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
   // box records the patches inside it and nothing else.
   const bool walls = box_index_ != 0 && !hierarchy_.transparent;
   const size_t child_count = hierarchy_.transparent ? 0 : box_.children.size();
-  // Records are built in `out`, whose event lists keep their memory from
-  // chunk to chunk (the caller's vector), then put in their stored order in
-  // place: one set of records per thread (a second set, swapped into `out`,
-  // was a third of the preprocess's peak memory).
+  // The lines are traced into one flat set of records (line i's events are
+  // events[first[i] .. first[i + 1])), kept from chunk to chunk by the
+  // thread, then gathered into `out` in their stored order: no allocation
+  // per line, and the memory is one chunk's whatever lines.total is.
+  thread_local linestore::DecodedChunk traced;
+  traced.clear();
+  traced.first.reserve(n + 1);
+  traced.entry_ar.reserve(n);
+  traced.exit_ar.reserve(n);
   thread_local std::vector<LineHit> hits;
-  out.resize(n);
   struct ChildCrossing {
     double t_in, t_out;
     Event event;
@@ -103,20 +106,24 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
   // equal keys make one map update each.
   thread_local std::vector<uint64_t> met;
   met.clear();
+  std::vector<Event>& events = traced.events;
   for (uint64_t i = 0; i < n; ++i) {
     double u[4];
     sequence_.point(first + i, rng, u);
     const GlobalLine line = sampler_.sample(u);
-    linestore::LineRecord& record = out[i];
-    record.entry_ar = record.exit_ar = linestore::kNoAr;
-    record.events.clear();
+    const size_t begin = events.size();
+    traced.first.push_back(static_cast<uint32_t>(begin));
+    uint32_t entry_ar = linestore::kNoAr, exit_ar = linestore::kNoAr;
     BoxCrossing wall{};
-    if (walls) {
-      // A subscene's line: its ends are where it crosses the box's walls.
-      if (!cross_box(box_.bounds, line.org, line.dir, wall)) continue;
-      record.entry_ar = box_.ar_at(wall.face_in, line.org + line.dir * wall.t_in, line.dir);
-      record.exit_ar = box_.ar_at(wall.face_out, line.org + line.dir * wall.t_out, line.dir);
+    // A subscene's line: its ends are where it crosses the box's walls.
+    const bool crosses = !walls || cross_box(box_.bounds, line.org, line.dir, wall);
+    if (walls && crosses) {
+      entry_ar = box_.ar_at(wall.face_in, line.org + line.dir * wall.t_in, line.dir);
+      exit_ar = box_.ar_at(wall.face_out, line.org + line.dir * wall.t_out, line.dir);
     }
+    traced.entry_ar.push_back(entry_ar);
+    traced.exit_ar.push_back(exit_ar);
+    if (!crosses) continue;
     tracer_.all_hits(line.org, line.dir, line.length, hits);
     order_ties(mesh_, tracer_.tie_epsilon(), hits);
     children.clear();
@@ -140,31 +147,32 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
     size_t next_child = 0;
     for (const LineHit& h : hits) {
       while (next_child < children.size() && h.t > 0.5 * (children[next_child].t_in + children[next_child].t_out))
-        record.events.push_back(children[next_child++].event);
+        events.push_back(children[next_child++].event);
       const uint32_t local = static_cast<uint32_t>(h.traced);  // the tracer holds the box's patches alone
-      record.events.push_back({Event::patch, local, h.along});
+      events.push_back({Event::patch, local, h.along});
       counts.patch_crossings[local]++;
     }
-    while (next_child < children.size()) record.events.push_back(children[next_child++].event);
-    if (class_span_ > 0) count_classes(record.events, counts);
+    while (next_child < children.size()) events.push_back(children[next_child++].event);
+    const Event* ev = events.data() + begin;
+    const int m = static_cast<int>(events.size() - begin);
+    if (class_span_ > 0) count_classes(ev, m, counts);
     if (walls) {
-      counts.wall_lines[record.entry_ar]++;
-      counts.wall_lines[record.exit_ar]++;
-      if (record.events.empty()) {
-        counts.wall_open[record.entry_ar]++;
-        counts.wall_open[record.exit_ar]++;
+      counts.wall_lines[entry_ar]++;
+      counts.wall_lines[exit_ar]++;
+      if (m == 0) {
+        counts.wall_open[entry_ar]++;
+        counts.wall_open[exit_ar]++;
       } else {
         // Associated patches: what a line entering at either end meets first.
         // (Invisible backs let it through to the next.)
-        const auto& ev = record.events;
-        const int m = static_cast<int>(ev.size());
         const auto seen = [&](int x, int d) { return towards(ev[x], d); };
         const int a = next_seen(-1, +1, m, seen), b = next_seen(m, -1, m, seen);
-        if (a < m && ev[a].kind == Event::patch) met.push_back(linestore::associated_key(record.entry_ar, ev[a].id));
-        if (b >= 0 && ev[b].kind == Event::patch) met.push_back(linestore::associated_key(record.exit_ar, ev[b].id));
+        if (a < m && ev[a].kind == Event::patch) met.push_back(linestore::associated_key(entry_ar, ev[a].id));
+        if (b >= 0 && ev[b].kind == Event::patch) met.push_back(linestore::associated_key(exit_ar, ev[b].id));
       }
     }
   }
+  traced.first.push_back(static_cast<uint32_t>(events.size()));
   std::sort(met.begin(), met.end());
   for (size_t i = 0; i < met.size();) {
     size_t j = i;
@@ -178,37 +186,14 @@ void ChunkTracer::trace(uint64_t chunk, std::vector<linestore::LineRecord>& out,
   thread_local std::vector<std::pair<uint64_t, uint32_t>> keys;  // (first + 1) << 32 | last, line
   keys.resize(n);
   for (uint64_t i = 0; i < n; ++i) {
-    const auto& e = out[i].events;
-    keys[i] = {e.empty() ? 0 : ((uint64_t{e.front().id} + 1) << 32) | e.back().id, static_cast<uint32_t>(i)};
+    const uint32_t a = traced.first[i], b = traced.first[i + 1];
+    keys[i] = {a == b ? 0 : ((uint64_t{events[a].id} + 1) << 32) | events[b - 1].id, static_cast<uint32_t>(i)};
   }
   std::sort(keys.begin(), keys.end());  // ties by line index: a stable order
-  // Position i takes the record of line keys[i].second: each cycle of that
-  // permutation is followed once, moving records (their lists, not events).
-  thread_local std::vector<uint8_t> placed;
-  placed.assign(n, 0);
-  for (uint64_t i = 0; i < n; ++i) {
-    if (placed[i]) continue;
-    linestore::LineRecord first_record = std::move(out[i]);
-    uint64_t at = i;
-    for (;;) {
-      placed[at] = 1;
-      const uint64_t from = keys[at].second;
-      if (from == i) {
-        out[at] = std::move(first_record);
-        break;
-      }
-      out[at] = std::move(out[from]);
-      at = from;
-    }
-  }
-  for (uint64_t i = 0; i < n; ++i) {
-    // Event lists pass from line to line between chunks; one that held a
-    // long line would keep that memory for ever, and over many chunks every
-    // list would grow to the longest line's size (peak memory grew with
-    // lines.total). Lists are kept within twice what they hold.
-    std::vector<Event>& e = out[i].events;
-    if (e.capacity() > 2 * e.size() + 8) e.shrink_to_fit();
-  }
+  thread_local std::vector<uint32_t> order;
+  order.resize(n);
+  for (uint64_t i = 0; i < n; ++i) order[i] = keys[i].second;
+  linestore::gather_lines(traced, order.data(), n, out);
 }
 
 }  // namespace mpath

@@ -34,12 +34,13 @@ class ChunkTracer {
   uint64_t lines_in(uint64_t chunk) const;
   // An empty tally of the right sizes for this box.
   BoxTally empty_tally() const;
-  // The records of chunk `chunk`; adds what they count to `tally`.
-  void trace(uint64_t chunk, std::vector<linestore::LineRecord>& out, BoxTally& tally) const;
+  // The lines of chunk `chunk` in their stored order; adds what they count to `tally`.
+  void trace(uint64_t chunk, linestore::DecodedChunk& out, BoxTally& tally) const;
 
  private:
-  // Transparent boxes: adds a line's pairs of consecutive crossings to the class counts.
-  void count_classes(const std::vector<linestore::Event>& events, linestore::BoxCounts& counts) const;
+  // Transparent boxes: adds the pairs of consecutive crossings of a line's
+  // `n` events to the class counts.
+  void count_classes(const linestore::Event* events, int n, linestore::BoxCounts& counts) const;
   // The face (or kBlackSide, kInvisibleSide) event `e` turns towards
   // direction d; a child box is never invisible.
   int towards(const linestore::Event& e, int d) const {

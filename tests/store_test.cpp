@@ -54,7 +54,7 @@ TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
   // In memory: the same chunks traced again, the same shards, the same passes.
   const Hierarchy flat = build_hierarchy(mesh, o.hierarchy, true);
   const ChunkTracer chunks(o, mesh, flat, 0, static_cast<uint64_t>(o.lines.total));
-  std::vector<std::vector<linestore::LineRecord>> records(chunks.chunk_count());
+  std::vector<linestore::DecodedChunk> records(chunks.chunk_count());
   BoxTally tally = chunks.empty_tally();
   for (uint64_t c = 0; c < chunks.chunk_count(); ++c) chunks.trace(c, records[c], tally);
   // Counted here, independently of the store; patch k of the root is patch k of the mesh.
@@ -76,11 +76,11 @@ TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
       std::vector<LineHit> hits;
       std::vector<uint32_t> order;
       for (uint64_t c = records.size() * s / 2; c < records.size() * (s + 1) / 2; ++c) {
-        chunk_line_order(2 * pass, 0, c, records[c].size(), order);  // the root's pass of iteration p is rotation 2p
+        chunk_line_order(2 * pass, 0, c, records[c].lines(), order);  // the root's pass of iteration p is rotation 2p
         for (uint32_t l : order) {
-          const auto& line = records[c][l];
           hits.clear();
-          for (const auto& e : line.events) hits.push_back({0.0, static_cast<int>(e.id), e.along});
+          for (uint32_t k = records[c].first[l]; k < records[c].first[l + 1]; ++k)
+            hits.push_back({0.0, static_cast<int>(records[c].events[k].id), records[c].events[k].along});
           transport_line(in, hits, acc[s]);
         }
       }
