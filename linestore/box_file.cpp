@@ -9,6 +9,7 @@
 
 #include "error.h"
 #include "hash.h"
+#include "prefetch.h"
 #include "varint.h"
 #include "zstd_frame.h"
 
@@ -54,10 +55,17 @@ std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events)
   return encoder.finish();
 }
 
-std::string encode_lines(const DecodedChunk& lines, uint64_t& events) {
-  ChunkEncoder encoder(lines.lines());
-  for (size_t i = 0; i < lines.lines(); ++i)
+std::string encode_lines(const DecodedChunk& lines, const uint32_t* order, uint64_t& events) {
+  const size_t n = lines.lines();
+  ChunkEncoder encoder(n);
+  // The lines are taken in `order`, at random in a chunk of megabytes: their
+  // events are announced a few lines ahead, or the encoder waits on memory.
+  constexpr size_t kAhead = 8;
+  for (size_t k = 0; k < n; ++k) {
+    if (k + kAhead < n) prefetch(lines.events.data() + lines.first[order[k + kAhead]]);
+    const uint32_t i = order[k];
     encoder.add(lines.entry_ar[i], lines.exit_ar[i], lines.events.data() + lines.first[i], lines.first[i + 1] - lines.first[i]);
+  }
   events = encoder.events();
   return encoder.finish();
 }

@@ -71,7 +71,8 @@ struct EncodedChunk {
 EncodedChunk encode_chunk(const std::vector<LineRecord>& lines, uint64_t first_line, int level);
 // The two steps apart, for callers that time them.
 std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events);
-std::string encode_lines(const DecodedChunk& lines, uint64_t& events);
+// Lines order[0 .. n) of `lines` (n = lines.lines()), in that order.
+std::string encode_lines(const DecodedChunk& lines, const uint32_t* order, uint64_t& events);
 EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_t lines, uint64_t events, int level);
 
 // Writes a box file under a temporary name; `finish` renames it into place.

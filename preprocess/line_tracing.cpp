@@ -40,6 +40,12 @@ ChunkTracer::ChunkTracer(const Options& options, const PatchMesh& mesh, const Hi
     for (int p : box_.patches) owner_.push_back(hierarchy.patch_box[static_cast<size_t>(p)]);
 }
 
+linestore::DecodedChunk TracedChunk::stored() const {
+  linestore::DecodedChunk out;
+  linestore::gather_lines(lines, order.data(), order.size(), out);
+  return out;
+}
+
 uint64_t ChunkTracer::lines_in(uint64_t chunk) const { return std::min(chunk_lines_, total_ - first_line(chunk)); }
 
 BoxTally ChunkTracer::empty_tally() const {
@@ -77,7 +83,7 @@ void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore
   for (uint32_t* c : counters) ++*c;
 }
 
-void ChunkTracer::trace(uint64_t chunk, linestore::DecodedChunk& out, BoxTally& tally) const {
+void ChunkTracer::trace(uint64_t chunk, TracedChunk& out, BoxTally& tally) const {
   using linestore::Event;
   Rng rng = make_rng(seed_, kStoreLineStream, (static_cast<unsigned long long>(box_index_) << 40) + chunk);
   const uint64_t first = first_line(chunk), n = lines_in(chunk);
@@ -88,13 +94,15 @@ void ChunkTracer::trace(uint64_t chunk, linestore::DecodedChunk& out, BoxTally& 
   const size_t child_count = hierarchy_.transparent ? 0 : box_.children.size();
   // The lines are traced into one flat set of records (line i's events are
   // events[first[i] .. first[i + 1])), kept from chunk to chunk by the
-  // thread, then gathered into `out` in their stored order: no allocation
-  // per line, and the memory is one chunk's whatever lines.total is.
-  thread_local linestore::DecodedChunk traced;
+  // caller: no allocation per line, and the memory is one chunk's whatever
+  // lines.total is. Room for 16 events a line is reserved (untouched pages
+  // cost no memory), so that growing does not hold the old and new lists.
+  linestore::DecodedChunk& traced = out.lines;
   traced.clear();
   traced.first.reserve(n + 1);
   traced.entry_ar.reserve(n);
   traced.exit_ar.reserve(n);
+  traced.events.reserve(16 * n);
   thread_local std::vector<LineHit> hits;
   struct ChildCrossing {
     double t_in, t_out;
@@ -190,10 +198,8 @@ void ChunkTracer::trace(uint64_t chunk, linestore::DecodedChunk& out, BoxTally& 
     keys[i] = {a == b ? 0 : ((uint64_t{events[a].id} + 1) << 32) | events[b - 1].id, static_cast<uint32_t>(i)};
   }
   std::sort(keys.begin(), keys.end());  // ties by line index: a stable order
-  thread_local std::vector<uint32_t> order;
-  order.resize(n);
-  for (uint64_t i = 0; i < n; ++i) order[i] = keys[i].second;
-  linestore::gather_lines(traced, order.data(), n, out);
+  out.order.resize(n);
+  for (uint64_t i = 0; i < n; ++i) out.order[i] = keys[i].second;
 }
 
 }  // namespace mpath

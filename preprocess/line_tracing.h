@@ -26,6 +26,15 @@ struct BoxTally {
   void merge_into(BoxTally& total) const;
 };
 
+// A chunk's lines as traced, and their stored order: line k of the file is
+// line order[k] of `lines`.
+struct TracedChunk {
+  linestore::DecodedChunk lines;
+  std::vector<uint32_t> order;
+  // The lines in stored order (what the file holds once decoded).
+  linestore::DecodedChunk stored() const;
+};
+
 class ChunkTracer {
  public:
   ChunkTracer(const Options& options, const PatchMesh& mesh, const Hierarchy& hierarchy, int box, uint64_t lines);
@@ -34,8 +43,8 @@ class ChunkTracer {
   uint64_t lines_in(uint64_t chunk) const;
   // An empty tally of the right sizes for this box.
   BoxTally empty_tally() const;
-  // The lines of chunk `chunk` in their stored order; adds what they count to `tally`.
-  void trace(uint64_t chunk, linestore::DecodedChunk& out, BoxTally& tally) const;
+  // The lines of chunk `chunk`; adds what they count to `tally`.
+  void trace(uint64_t chunk, TracedChunk& out, BoxTally& tally) const;
 
  private:
   // Transparent boxes: adds the pairs of consecutive crossings of a line's

@@ -157,15 +157,15 @@ linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, co
           tbb::make_filter<uint64_t, linestore::EncodedChunk>(
               tbb::filter_mode::parallel,
               [&](uint64_t c) {
-                thread_local linestore::DecodedChunk records;  // keeps its memory from chunk to chunk
+                thread_local TracedChunk records;  // keeps its memory from chunk to chunk
                 auto t0 = clock::now();
                 chunks.trace(c, records, tallies.local());
                 auto t1 = clock::now();
                 uint64_t events = 0;
-                const std::string raw = linestore::encode_lines(records, events);
+                const std::string raw = linestore::encode_lines(records.lines, records.order.data(), events);
                 auto t2 = clock::now();
                 linestore::EncodedChunk out =
-                    linestore::compress_chunk(raw, chunks.first_line(c), records.lines(), events, options.store.zstd_level);
+                    linestore::compress_chunk(raw, chunks.first_line(c), records.order.size(), events, options.store.zstd_level);
                 auto t3 = clock::now();
                 trace_ns += ns(t1 - t0);
                 encode_ns += ns(t2 - t1);

@@ -302,7 +302,7 @@ std::vector<double> traced_transmittance(const PatchMesh& mesh, const Bounds& bo
   o.store.chunk_lines = 65536;
   const ChunkTracer tracer(o, mesh, h, 1, lines);
   BoxTally tally = tracer.empty_tally();
-  linestore::DecodedChunk records;
+  TracedChunk records;
   for (uint64_t c = 0; c < tracer.chunk_count(); ++c) tracer.trace(c, records, tally);
   box = h.boxes[1];
   return transmittances(box, tally.counts.wall_lines, tally.counts.wall_open);
@@ -328,7 +328,7 @@ TEST(Transmittance, OfAnEmptyBoxIsOneInEveryAr) {
   Options o;
   const ChunkTracer tracer(o, mesh, h, 1, 100000);
   BoxTally tally = tracer.empty_tally();
-  linestore::DecodedChunk records;
+  TracedChunk records;
   for (uint64_t c = 0; c < tracer.chunk_count(); ++c) tracer.trace(c, records, tally);
   const auto t = transmittances(h.boxes[1], tally.counts.wall_lines, tally.counts.wall_open);
   for (double v : t) ASSERT_EQ(v, 1.0);

@@ -55,8 +55,12 @@ TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
   const Hierarchy flat = build_hierarchy(mesh, o.hierarchy, true);
   const ChunkTracer chunks(o, mesh, flat, 0, static_cast<uint64_t>(o.lines.total));
   std::vector<linestore::DecodedChunk> records(chunks.chunk_count());
+  TracedChunk traced;
   BoxTally tally = chunks.empty_tally();
-  for (uint64_t c = 0; c < chunks.chunk_count(); ++c) chunks.trace(c, records[c], tally);
+  for (uint64_t c = 0; c < chunks.chunk_count(); ++c) {
+    chunks.trace(c, traced, tally);
+    records[c] = traced.stored();
+  }
   // Counted here, independently of the store; patch k of the root is patch k of the mesh.
   std::vector<double> crossings(mesh.face_count(), 0.0);
   for (size_t p = 0; p < mesh.patches.size(); ++p)
