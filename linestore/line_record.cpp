@@ -1,6 +1,5 @@
 #include "line_record.h"
 
-#include "prefetch.h"
 #include "varint.h"
 #include "zstd_frame.h"
 
@@ -94,13 +93,9 @@ void gather_lines(const DecodedChunk& from, const uint32_t* order, size_t n, Dec
     out.exit_ar[k] = from.exit_ar[l];
   }
   out.events.resize(out.first[n]);
-  // Lines are a few events long: a plain loop, not a call to memmove per
-  // line. Their events are announced a few lines ahead: they lie at random
-  // in a chunk of megabytes.
-  constexpr size_t kAhead = 8;
+  // Lines are a few events long: a plain loop, not a call to memmove per line.
   Event* to = out.events.data();
   for (size_t k = 0; k < n; ++k) {
-    if (k + kAhead < n) prefetch(from.events.data() + from.first[order[k + kAhead]]);
     const uint32_t l = order[k];
     for (uint32_t e = from.first[l]; e < from.first[l + 1]; ++e) *to++ = from.events[e];
   }
