@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "atomic_file.h"
+#include "process_memory.h"
 #include "box_file.h"
 #include "directory_lock.h"
 #include "error.h"

@@ -2,7 +2,7 @@
 
 #include <numbers>
 
-#include "atomic_file.h"
+#include "process_memory.h"
 #include "color.h"
 #include "mpath_version.h"
 #include "tracer.h"

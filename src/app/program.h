@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "atomic_file.h"
+#include "process_memory.h"
 #include "config.h"
 #include "config_keys.h"
 #include "error.h"

@@ -38,14 +38,4 @@ std::filesystem::path temporary_path(const std::filesystem::path& final_path);
 // Renames a finished temporary file onto its final name, or throws.
 void commit_temporary(const std::filesystem::path& temp, const std::filesystem::path& final_path);
 
-// Peak resident memory of this process, bytes.
-size_t peak_rss_bytes();
-
-// Asks the allocator to keep memory freed by the program for its next
-// allocations instead of giving it back to the system at once: a pass
-// allocates its shards' accumulators (megabytes) afresh, and faulting their
-// pages in again every pass cost 10-20 % of a solve on OFFICE. Resident memory
-// then stays at its peak, which the report gives anyway.
-void keep_freed_memory();
-
 }  // namespace mpath
