@@ -48,13 +48,6 @@ fs::path partial_path(const fs::path& path) {
   return path.parent_path() / name;
 }
 
-std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events) {
-  ChunkEncoder encoder(lines.size());
-  for (const LineRecord& l : lines) encoder.add(l);
-  events = encoder.events();
-  return encoder.finish();
-}
-
 std::string encode_lines(const DecodedChunk& lines, const uint32_t* order, uint64_t& events) {
   const size_t n = lines.lines();
   ChunkEncoder encoder(n);
@@ -77,11 +70,6 @@ EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_
   return c;
 }
 
-EncodedChunk encode_chunk(const std::vector<LineRecord>& lines, uint64_t first_line, int level) {
-  uint64_t events = 0;
-  const std::string raw = encode_lines(lines, events);
-  return compress_chunk(raw, first_line, lines.size(), events, level);
-}
 
 BoxFileWriter::BoxFileWriter(const fs::path& path, uint32_t box) : file_(path, partial_path(path)), box_(box) {
   put(kMagic, sizeof kMagic);

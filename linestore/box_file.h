@@ -67,11 +67,9 @@ struct EncodedChunk {
   ChunkInfo info;     // offset filled in by the writer
 };
 
-// Encodes and compresses lines [first_line, first_line + lines.size()).
-EncodedChunk encode_chunk(const std::vector<LineRecord>& lines, uint64_t first_line, int level);
-// The two steps apart, for callers that time them.
-std::string encode_lines(const std::vector<LineRecord>& lines, uint64_t& events);
-// Lines order[0 .. n) of `lines` (n = lines.lines()), in that order.
+// Encodes lines order[0 .. n) of `lines` (n = lines.lines()), in that
+// order; then compress_chunk makes the frame of lines [first_line,
+// first_line + n). Two steps, for callers that time them.
 std::string encode_lines(const DecodedChunk& lines, const uint32_t* order, uint64_t& events);
 EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_t lines, uint64_t events, int level);
 

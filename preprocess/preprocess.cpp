@@ -11,7 +11,6 @@
 #include <nlohmann/json.hpp>
 
 #include "atomic_file.h"
-#include "process_memory.h"
 #include "box_file.h"
 #include "directory_lock.h"
 #include "error.h"
@@ -23,6 +22,7 @@
 #include "manifest.h"
 #include "mpath_version.h"
 #include "prepared_scene.h"
+#include "process_memory.h"
 #include "progress.h"
 #include "store_identity.h"
 

@@ -53,6 +53,19 @@ std::vector<LineRecord> records(const DecodedChunk& c) {
   return out;
 }
 
+// The lines as one flat set, as the preprocess traces them.
+DecodedChunk flat(const std::vector<LineRecord>& lines) {
+  DecodedChunk c;
+  for (const LineRecord& l : lines) {
+    c.first.push_back(static_cast<uint32_t>(c.events.size()));
+    c.entry_ar.push_back(l.entry_ar);
+    c.exit_ar.push_back(l.exit_ar);
+    c.events.insert(c.events.end(), l.events.begin(), l.events.end());
+  }
+  c.first.push_back(static_cast<uint32_t>(c.events.size()));
+  return c;
+}
+
 // Writes a file of `chunks` chunks of 1000 random lines; returns the lines.
 BoxCounts some_counts(std::vector<uint32_t> patch_crossings) {
   BoxCounts c;
@@ -72,7 +85,11 @@ std::vector<std::vector<LineRecord>> write_box(const std::filesystem::path& path
   std::vector<std::vector<LineRecord>> all;
   for (int c = 0; c < chunks; ++c) {
     all.push_back(random_lines(1000, rng));
-    writer.write(encode_chunk(all.back(), 1000ull * c, 3));
+    std::vector<uint32_t> order(all.back().size());
+    std::iota(order.begin(), order.end(), 0u);
+    uint64_t events = 0;
+    const std::string raw = encode_lines(flat(all.back()), order.data(), events);
+    writer.write(compress_chunk(raw, 1000ull * c, order.size(), events, 3));
   }
   writer.finish(some_counts(std::move(patch_crossings)));
   return all;
