@@ -240,6 +240,7 @@ void BoxStore::lay_out_boxes(const PatchMesh& mesh) {
         box.face_global.push_back(face);
       }
       box.local_faces.push_back(local);
+      if (!mesh.contact_plane.empty()) box.local_contact.push_back(mesh.contact_plane[p]);
     }
     uint32_t offset = 0;
     for (int c : sb.children) {

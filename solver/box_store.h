@@ -28,6 +28,9 @@ struct StoreBox {
   // local_faces[k] = {front, back or -1}; face_global maps them to the mesh.
   std::vector<std::array<int, 2>> local_faces;
   std::vector<int> face_global;
+  // Per local patch, its contact plane (PatchMesh::contact_plane); empty
+  // when the scene has none.
+  std::vector<int> local_contact;
   std::vector<double> face_crossings;  // per local face
   // Per local face: itself when the box's lines cross it; else the nearest
   // crossed face of the same polygon facing the same way, which sends its
@@ -56,6 +59,14 @@ struct StoreBox {
 inline int face_towards(const StoreBox& box, const linestore::Event& e, int dir) {
   const auto& f = box.local_faces[e.id];
   return (dir > 0) == e.along ? f[0] : f[1];
+}
+
+// Whether the patch crossings `a` and `b`, neighbours on a line, touch
+// (PatchMesh::touching): the faces they turn towards each other exchange
+// nothing.
+inline bool touching(const StoreBox& box, const linestore::Event& a, const linestore::Event& b) {
+  return !box.local_contact.empty() && a.kind == linestore::Event::patch && b.kind == linestore::Event::patch &&
+         box.local_contact[a.id] >= 0 && box.local_contact[a.id] == box.local_contact[b.id];
 }
 
 class BoxStore {

@@ -43,13 +43,25 @@ void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int fa
   const int patch = mesh.face_patch[face];
   const Vec3 n = mesh.face_normal(face);
   const Vec3 org = uniform_point(mesh, mesh.patches[patch], rng);
+  if (!mesh.contact_plane.empty() && mesh.contact_plane[patch] >= 0) {
+    // Where the face touches another, a line along the normal meets it at
+    // distance 0, whatever the direction the cosine draws next (grazing
+    // lines may slip past a surface at distance 0).
+    const NearestHit probe = nearest(patch, org, n);
+    if (probe.patch >= 0 && mesh.touching(patch, probe.patch)) {
+      receive_in_contact(state, face, mesh.face_met(probe.patch, n), power, acc);
+      return;
+    }
+  }
   const Vec3 dir = cosine_direction(n, rng);
   const NearestHit hit = nearest(patch, org, dir);
   if (hit.patch < 0) {
     for (int c = 0; c < state.channels; ++c) acc.escaped[c] += power[c];
     return;
   }
-  receive(state, mesh.face_met(hit.patch, dir), power, acc);
+  const int met = mesh.face_met(hit.patch, dir);
+  if (mesh.touching(patch, hit.patch)) receive_in_contact(state, face, met, power, acc);
+  else receive(state, met, power, acc);
 }
 
 // A point source ([[light]]): its radiant power is added to the emitted

@@ -236,13 +236,22 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
     for (int c = 0; c < ch; ++c) power[c] = input.quota[c] * fraction;
     send_power(from, dir, power);
   };
+  const int n = static_cast<int>(m);
   auto send_face = [&](int face, int from, int dir) {
     if (face < 0) return;
+    if (!in.box->local_contact.empty()) {
+      const int j = next_seen(from, dir, n, [&](int x, int d) {
+        return ev[x].kind == Event::patch ? face_towards(*in.box, ev[x], d) : 0;
+      });
+      if (j >= 0 && j < n && touching(*in.box, ev[from], ev[j])) {
+        face_keep(in.faces[face], acc.faces[face], allowance, ch);
+        return;
+      }
+    }
     double power[3];
     face_send(in.faces[face], acc.faces[face], allowance, ch, power);
     send_power(from, dir, power);
   };
-  const int n = static_cast<int>(m);
   if (entry != kNoAr) send_ar(in.wall[entry], shard.wall_used[entry], -1, +1);
   for (int i = 0; i < n; ++i) {
     const Event& e = ev[i];

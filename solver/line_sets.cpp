@@ -263,6 +263,17 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       double share = input.share;
       if (in.capped) share = std::max(0.0, std::min(share, acc.cap - acc.used));
       acc.used += share;
+      if (j >= 0 && j < n && touching(box, ev[i], ev[j])) {
+        // Pressed against the next surface: the share stays with the face,
+        // as what it gathers does (docs/scene-formats.md, "Surfaces in contact").
+        const double now = from.carried_share();
+        for (int c = 0; c < ch; ++c) {
+          const double kept = input.quota[c] * share;
+          fa.gathered[c] += kept * now;
+          if (now < 1) shard.later[face].later[c] += kept * (1 - now);
+        }
+        continue;
+      }
       SetShard::Send s{j, dir, {0, 0, 0}};
       bool any = false;
       for (int c = 0; c < ch; ++c) {

@@ -58,6 +58,20 @@ void receive(const RadiosityState& s, int face, const double* power, ShardAccumu
   }
 }
 
+void receive_in_contact(const RadiosityState& s, int from, int to, const double* power, ShardAccumulator& acc) {
+  const int ch = s.channels;
+  for (int c = 0; c < ch; ++c) acc.absorbed[c] += power[c];
+  if (to < 0) return;
+  for (int c = 0; c < ch; ++c) {
+    const double rho_from = s.rho[s.at(from, c)], rho_to = s.rho[s.at(to, c)];
+    // Reflectances of 1 on both sides would hold the power for ever: a
+    // reflectance a hair below 1 keeps the sums finite.
+    const double loss = std::max(1.0 - rho_from * rho_to, 1e-9);
+    acc.faces[to].phi_gain[c] += rho_to * power[c] / loss;
+    acc.faces[from].phi_gain[c] += rho_from * rho_to * power[c] / loss;
+  }
+}
+
 void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, ShardAccumulator& acc) {
   const PatchMesh& mesh = *in.mesh;
   const int ch = in.channels;
@@ -70,9 +84,20 @@ void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, Shar
   std::vector<Send>& sends = acc.sends;
   sends.clear();
 
-  auto send_from = [&](int face, int to_hit, bool forward) {
+  const auto towards = [&](int j, int d) {
+    const Facing f = facing(mesh, hits[j]);
+    return d > 0 ? f.forward : f.backward;
+  };
+  auto send_from = [&](int face, int i, int dir) {
     if (face < 0) return;
-    Send out{to_hit, forward, {0, 0, 0}};
+    Send out{i + dir, dir > 0, {0, 0, 0}};
+    if (!mesh.contact_plane.empty()) {
+      const int j = next_seen(i, dir, static_cast<int>(n), towards);
+      if (j >= 0 && j < static_cast<int>(n) && mesh.touching(hits[i].patch, hits[j].patch)) {
+        face_keep(in.faces[face], acc.faces[face], acc.allowance, ch);
+        return;
+      }
+    }
     face_send(in.faces[face], acc.faces[face], acc.allowance, ch, out.power);
     bool any = false;
     for (int c = 0; c < ch; ++c) any |= out.power[c] != 0;
@@ -81,8 +106,8 @@ void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, Shar
 
   for (size_t i = 0; i < n; ++i) {
     const Facing f = facing(mesh, hits[i]);
-    send_from(f.forward, static_cast<int>(i) + 1, true);
-    send_from(f.backward, static_cast<int>(i) - 1, false);
+    send_from(f.forward, static_cast<int>(i), +1);
+    send_from(f.backward, static_cast<int>(i), -1);
   }
   for (const Send& out : sends) {
     // The first crossing on its way that does not let it through.

@@ -119,6 +119,17 @@ inline void face_send(const FaceInput& input, FaceAccumulator& a, double allowan
   }
 }
 
+// A crossing where the face touches the next surface (a frame's back on the
+// wall): its share of the quota is taken as for a send, but the power stays
+// with the face and leaves along its next crossing in the pass (or stays
+// unshot): nothing passes between surfaces pressed together, and no power
+// is lost or made (docs/scene-formats.md, "Surfaces in contact").
+inline void face_keep(const FaceInput& input, FaceAccumulator& a, double allowance, int ch) {
+  double power[3];
+  face_send(input, a, allowance, ch, power);
+  for (int c = 0; c < ch; ++c) a.gathered[c] = power[c];
+}
+
 // Power arriving at a face during a pass: rho of it is accumulated and
 // gathered for sending on, the rest absorbed.
 inline void face_receive(const FaceInput& input, FaceAccumulator& a, const double* power, int ch, double* absorbed) {
@@ -133,6 +144,13 @@ inline void face_receive(const FaceInput& input, FaceAccumulator& a, const doubl
 // Power arriving at `face` (-1: a black back side) outside a pass (the first
 // shot): rho of it is kept as accumulated and unshot power, the rest absorbed.
 void receive(const RadiosityState& state, int face, const double* power, ShardAccumulator& acc);
+
+// Power that face `from` emits where it touches face `to` (-1: a black back
+// side): the two see only each other, so it bounces between them until it
+// is absorbed, all of it, in closed form. `to` keeps rho_to / (1 - rho_from
+// rho_to) of it and `from` rho_from rho_to / (1 - rho_from rho_to), as
+// radiosity that never leaves the contact (not unshot).
+void receive_in_contact(const RadiosityState& state, int from, int to, const double* power, ShardAccumulator& acc);
 
 // Adds a pass's shard accumulators to the state, in shard order; the share of
 // each face's quota that no line took stays unshot.

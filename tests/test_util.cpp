@@ -187,9 +187,10 @@ Options test_options(long long global_lines, long long local_lines, double max_p
   return o;
 }
 
-Solved solve_classic_in_memory(const Scene& scene, const Options& options) {
+Solved solve_classic_in_memory(const Scene& scene, const Options& options, bool contacts) {
   Solved s;
   s.mesh = build_mesh(scene, options.mesh.max_patch_area);
+  if (!contacts) s.mesh.contact_plane.clear();
   const Tracer tracer(s.mesh);
   s.state = make_state(scene, s.mesh);
   const std::vector<double> crossings_per_area = emitter_crossings(options, forecast_crossings(s.mesh, static_cast<double>(options.lines.total)));

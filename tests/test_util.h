@@ -62,7 +62,9 @@ struct Solved {
   RadiosityState state;
   IterationLog log;
 };
-Solved solve_classic_in_memory(const Scene& scene, const Options& options);
+// `contacts` false: the mesh forgets which surfaces touch (what mpath did
+// before it knew them), for tests that show a check can fail.
+Solved solve_classic_in_memory(const Scene& scene, const Options& options, bool contacts = true);
 
 // A table of separate objects (top and four legs) standing on the floor z = 0
 // with its top's corner at (x, y); its legs are well inside the top's

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 
 #include "scene_readers.h"
@@ -40,6 +41,11 @@ PreparedScene prepare_scene(const Options& options) {
                  out.contacts.skipped);
   spdlog::info("mesh: {} patches, {} faces, max patch area {:.4g}{}", out.mesh.patches.size(), out.mesh.face_count(),
                out.mesh.max_patch_area, options.mesh.max_patch_area > 0 ? "" : " (automatic)");
+  const auto touching = std::count_if(out.mesh.contact_plane.begin(), out.mesh.contact_plane.end(),
+                                      [](int plane) { return plane >= 0; });
+  if (touching > 0)
+    spdlog::info("contacts: {} patches touch another surface there and exchange nothing with it (docs/scene-formats.md, "
+                 "\"Surfaces in contact\")", touching);
   return out;
 }
 

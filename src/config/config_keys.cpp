@@ -367,8 +367,9 @@ std::vector<ConfigKey> make_table() {
            if (o.mesh.curve_segments < 3 || o.mesh.curve_segments > 1024) bad_value(s, "expected an integer in [3, 1024]")),
        GET(o.mesh.curve_segments)},
       {"mesh.split_contacts",
-       "split polygons pressed against another (a frame on a wall) into their part in contact and the rest, so that "
-       "no patch mixes the two (see scene-formats.md)",
+       "also split polygons pressed against another (a frame on a wall) into their part in contact and the rest, so "
+       "that the covered part has a radiosity of its own; without it, touching surfaces already exchange nothing and "
+       "a straddling patch holds the area mean (see scene-formats.md, \"Surfaces in contact\")",
        SET(o.mesh.split_contacts = get_bool(n, s)), GET(o.mesh.split_contacts)},
       {"mesh.contact_min_area",
        "contacts of at most this area (scene units squared) are left whole unless they cover a fifth of the smaller "

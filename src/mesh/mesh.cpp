@@ -2,8 +2,10 @@
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Subdivider/Uniform/LongestEdgeT.hh>
+#include <algorithm>
 #include <cmath>
 
+#include "contact.h"
 #include "error.h"
 
 namespace mpath {
@@ -202,6 +204,43 @@ std::vector<std::array<uint32_t, 3>> triangulate(const std::vector<Vec3>& polygo
   return out;
 }
 
+namespace {
+
+// Per patch, the contact plane of its polygon when the patch's box overlaps
+// (by more than `eps` across) the box of a polygon it touches; else -1.
+// Empty when no patch touches anything.
+std::vector<int> touching_planes(const Scene& scene, const PatchMesh& mesh, double eps) {
+  const ContactPlanes contacts = contact_planes(scene);
+  std::vector<int> out(mesh.patches.size(), -1);
+  bool any = false;
+  for (size_t i = 0; i < mesh.patches.size(); ++i) {
+    const Patch& p = mesh.patches[i];
+    const size_t polygon = static_cast<size_t>(p.polygon);
+    if (contacts.plane[polygon] < 0) continue;
+    Bounds box;
+    for (const uint32_t v : p.v) box.extend(mesh.vertices[v]);
+    // On the plane the boxes are flat along its normal: only the other two
+    // axes must overlap by more than eps.
+    const int axis = std::fabs(p.normal.x) >= std::fabs(p.normal.y) && std::fabs(p.normal.x) >= std::fabs(p.normal.z) ? 0
+                     : std::fabs(p.normal.y) >= std::fabs(p.normal.z)                                          ? 1
+                                                                                                              : 2;
+    for (const Bounds& q : contacts.partner_bounds[polygon]) {
+      bool overlap = true;
+      for (int a = 0; a < 3; ++a)
+        if (a != axis) overlap &= std::min(box.hi[a], q.hi[a]) - std::max(box.lo[a], q.lo[a]) > eps;
+      if (overlap) {
+        out[i] = contacts.plane[polygon];
+        any = true;
+        break;
+      }
+    }
+  }
+  if (!any) out.clear();
+  return out;
+}
+
+}  // namespace
+
 double automatic_patch_area(const Scene& scene) { return scene.bounds().surface_area() / 2000.0; }
 
 PatchMesh build_mesh(const Scene& scene, double max_patch_area) {
@@ -228,6 +267,7 @@ PatchMesh build_mesh(const Scene& scene, double max_patch_area) {
 
   // Faces: all fronts, then the backs of two-sided patches.
   const int patches = static_cast<int>(mesh.patches.size());
+  mesh.contact_plane = touching_planes(scene, mesh, eps);
   mesh.patch_faces.assign(patches, {kBlackSide, kBlackSide});
   for (int i = 0; i < patches; ++i) {
     mesh.patch_faces[i][0] = i;

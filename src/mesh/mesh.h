@@ -38,6 +38,9 @@ struct PatchMesh {
   std::vector<std::array<int, 2>> patch_faces;
   std::vector<int> face_patch;     // face -> patch
   std::vector<uint8_t> face_side;  // face -> 0 front, 1 back
+  // Per patch: its polygon's contact plane (contact.h), or -1; empty when
+  // no plane of the scene holds polygons facing both ways.
+  std::vector<int> contact_plane;
   double max_patch_area = 0;
   size_t dropped_polygons = 0;     // degenerate polygons left out
   Bounds bounds;
@@ -53,6 +56,12 @@ struct PatchMesh {
   // face there (negative: the black or invisible back of a one-sided patch).
   int side_met(int patch, const Vec3& dir) const { return dot(patches[patch].normal, dir) < 0 ? 0 : 1; }
   int face_met(int patch, const Vec3& dir) const { return patch_faces[patch][side_met(patch, dir)]; }
+  // Whether crossings of patches `a` and `b` that are neighbours on a line
+  // touch: both lie on one contact plane, so the faces they turn towards
+  // each other are pressed together and exchange nothing.
+  bool touching(int a, int b) const {
+    return !contact_plane.empty() && contact_plane[a] >= 0 && contact_plane[a] == contact_plane[b];
+  }
 };
 
 // The most patches a mesh may have (about 10 GB of memory in all).

@@ -150,16 +150,10 @@ std::vector<Poly2> split_by(const Poly2& x, const Flat& q, double width) {
   return out;
 }
 
-}  // namespace
-
-ContactSplit split_contacts(Scene& scene, double min_area, double min_share) {
-  ContactSplit result;
-  const double size = std::max(scene.bounds().diagonal(), 1e-30);
-  const double plane_eps = 1e-7 * size;
-  std::vector<double> object_area(scene.objects.size() + 1, 0.0);
-  for (const Polygon& p : scene.polygons)
-    object_area.at(static_cast<size_t>(std::max(0, std::min<int>(p.object, static_cast<int>(scene.objects.size()))))) +=
-        polygon_area(p.vertices);
+// The polygons of `scene` on their planes, sorted so that polygons on one
+// plane (normal within 1e-5, offset within `plane_eps` of the one before)
+// are neighbours.
+std::vector<Flat> sorted_flats(const Scene& scene) {
   std::vector<Flat> flats;
   for (size_t k = 0; k < scene.polygons.size(); ++k) {
     Flat f = make_flat(scene.polygons[k], static_cast<int>(k));
@@ -168,45 +162,122 @@ ContactSplit split_contacts(Scene& scene, double min_area, double min_share) {
   std::sort(flats.begin(), flats.end(), [](const Flat& a, const Flat& b) {
     return a.key != b.key ? a.key < b.key : a.offset < b.offset;
   });
-  // Partners of each polygon: the polygons it is in contact with (indices into flats).
-  std::vector<std::vector<size_t>> partners(flats.size());
-  size_t budget = 200'000'000;  // box tests: a column of a million tiles is no hang
-  std::vector<size_t> group;
-  for (size_t i = 0; i < flats.size() && budget > 0;) {
+  return flats;
+}
+
+// Calls f(i, j) for every run flats[i .. j) on one plane that holds
+// polygons facing both ways (the only planes where surfaces can touch).
+template <typename F>
+void for_each_two_way_plane(const std::vector<Flat>& flats, double plane_eps, const F& f) {
+  for (size_t i = 0; i < flats.size();) {
     size_t j = i + 1;
     while (j < flats.size() && flats[j].key == flats[i].key && flats[j].offset - flats[j - 1].offset <= plane_eps) ++j;
     bool both_ways = false;
     for (size_t k = i + 1; k < j; ++k) both_ways |= flats[k].flipped != flats[i].flipped;
-    if (both_ways) {
-      group.clear();
-      for (size_t k = i; k < j; ++k) group.push_back(k);
-      std::sort(group.begin(), group.end(), [&](size_t a, size_t b) { return flats[a].lo_u < flats[b].lo_u; });
-      for (size_t x = 0; x < group.size() && budget > 0; ++x) {
-        const Flat& a = flats[group[x]];
-        for (size_t y = x + 1; y < group.size() && flats[group[y]].lo_u < a.hi_u && budget > 0; ++y) {
-          const Flat& b = flats[group[y]];
-          --budget;
-          if (a.flipped == b.flipped || b.lo_v >= a.hi_v || a.lo_v >= b.hi_v) continue;
-          if (std::fabs(a.offset - b.offset) > plane_eps) continue;
-          if (!a.is_convex || !b.is_convex) {  // boxes overlap; not examined further
-            ++result.skipped;
-            continue;
-          }
+    if (both_ways && !f(i, j)) return;
+    i = j;
+  }
+}
+
+double plane_tolerance(const Scene& scene) { return 1e-7 * std::max(scene.bounds().diagonal(), 1e-30); }
+
+// Per flat, the flats it is in contact with: facing the other way on its
+// plane, sharing more than `min_area` (or more than `min_share` of the
+// smaller object's surface). A pair with a concave polygon whose boxes
+// overlap is counted in `result.skipped`, and a partner only when
+// `concave_touch`.
+std::vector<std::vector<size_t>> find_partners(const Scene& scene, const std::vector<Flat>& flats, double min_area,
+                                               double min_share, bool concave_touch, ContactSplit& result) {
+  const double plane_eps = plane_tolerance(scene);
+  std::vector<double> object_area(scene.objects.size() + 1, 0.0);
+  for (const Polygon& p : scene.polygons)
+    object_area.at(static_cast<size_t>(std::max(0, std::min<int>(p.object, static_cast<int>(scene.objects.size()))))) +=
+        polygon_area(p.vertices);
+  std::vector<std::vector<size_t>> partners(flats.size());
+  size_t budget = 200'000'000;  // box tests: a column of a million tiles is no hang
+  std::vector<size_t> group;
+  for_each_two_way_plane(flats, plane_eps, [&](size_t i, size_t j) {
+    group.clear();
+    for (size_t k = i; k < j; ++k) group.push_back(k);
+    std::sort(group.begin(), group.end(), [&](size_t a, size_t b) { return flats[a].lo_u < flats[b].lo_u; });
+    for (size_t x = 0; x < group.size() && budget > 0; ++x) {
+      const Flat& a = flats[group[x]];
+      for (size_t y = x + 1; y < group.size() && flats[group[y]].lo_u < a.hi_u && budget > 0; ++y) {
+        const Flat& b = flats[group[y]];
+        --budget;
+        if (a.flipped == b.flipped || b.lo_v >= a.hi_v || a.lo_v >= b.hi_v) continue;
+        if (std::fabs(a.offset - b.offset) > plane_eps) continue;
+        bool touch = false;
+        if (!a.is_convex || !b.is_convex) {  // boxes overlap; not examined further
+          ++result.skipped;
+          touch = concave_touch;
+        } else {
           const double sb = signed_area(b.points) > 0 ? 1.0 : -1.0;
           const Poly2 common = clip_inside(a.points, b.points, sb);
           if (!substantial(common, plane_eps)) continue;
           const double shared = std::fabs(signed_area(common)) / std::fabs(a.n[a.axis]);
           const double smaller = std::min(object_area[scene.polygons[a.polygon].object],
                                           object_area[scene.polygons[b.polygon].object]);
-          if (shared <= min_area && !(min_share > 0 && shared > min_share * smaller)) continue;
-          partners[group[x]].push_back(group[y]);
-          partners[group[y]].push_back(group[x]);
-          ++result.pairs;
+          touch = shared > min_area || (min_share > 0 && shared > min_share * smaller);
         }
+        if (!touch) continue;
+        partners[group[x]].push_back(group[y]);
+        partners[group[y]].push_back(group[x]);
+        ++result.pairs;
       }
     }
-    i = j;
+    return budget > 0;
+  });
+  return partners;
+}
+
+}  // namespace
+
+ContactPlanes contact_planes(const Scene& scene) {
+  ContactPlanes out;
+  out.plane.assign(scene.polygons.size(), -1);
+  out.partner_bounds.resize(scene.polygons.size());
+  const std::vector<Flat> flats = sorted_flats(scene);
+  ContactSplit counts;
+  const auto partners = find_partners(scene, flats, -1.0, 0.0, true, counts);
+  // A plane index per run of touching flats (partners lie on one plane).
+  std::vector<int> plane_of(flats.size(), -1);
+  int planes = 0;
+  for (size_t k = 0; k < flats.size(); ++k) {
+    if (partners[k].empty() || plane_of[k] >= 0) continue;
+    std::vector<size_t> todo{k};
+    plane_of[k] = planes;
+    while (!todo.empty()) {
+      const size_t x = todo.back();
+      todo.pop_back();
+      for (const size_t y : partners[x])
+        if (plane_of[y] < 0) {
+          plane_of[y] = planes;
+          todo.push_back(y);
+        }
+    }
+    ++planes;
   }
+  for (size_t k = 0; k < flats.size(); ++k) {
+    if (plane_of[k] < 0) continue;
+    const size_t polygon = static_cast<size_t>(flats[k].polygon);
+    out.plane[polygon] = plane_of[k];
+    for (const size_t q : partners[k]) {
+      Bounds b;
+      for (const Vec3& v : scene.polygons[static_cast<size_t>(flats[q].polygon)].vertices) b.extend(v);
+      out.partner_bounds[polygon].push_back(b);
+    }
+  }
+  return out;
+}
+
+ContactSplit split_contacts(Scene& scene, double min_area, double min_share) {
+  ContactSplit result;
+  const double size = std::max(scene.bounds().diagonal(), 1e-30);
+  const double plane_eps = plane_tolerance(scene);
+  const std::vector<Flat> flats = sorted_flats(scene);
+  // Partners of each polygon: the polygons it is in contact with (indices into flats).
+  const auto partners = find_partners(scene, flats, min_area, min_share, false, result);
   if (result.pairs == 0) return result;
 
   // Each polygon in contact becomes its pieces, in its place.

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <vector>
 
 #include "scene.h"
 
@@ -28,6 +29,20 @@ struct ContactSplit {
 // boxes overlap are counted in `skipped`). Pieces keep the polygon's material, object and facing; the
 // order of polygons is kept (a split polygon's pieces take its place).
 ContactSplit split_contacts(Scene& scene, double min_area = 0, double min_share = 0);
+
+// Where surfaces touch, without splitting anything: two crossings of one
+// line on one plane are at one point, so where they are neighbours on the
+// line the faces they turn towards each other are pressed together and
+// exchange nothing (docs/scene-formats.md, "Surfaces in contact").
+struct ContactPlanes {
+  // Per polygon: an index shared by the polygons it touches (facing the
+  // other way on its plane, sharing area; with a concave polygon, boxes
+  // overlapping), or -1 for a polygon that touches nothing.
+  std::vector<int> plane;
+  // Per polygon: the bounding boxes of the polygons it touches.
+  std::vector<std::vector<Bounds>> partner_bounds;
+};
+ContactPlanes contact_planes(const Scene& scene);
 
 // The share of the smaller object's surface above which mpath splits a
 // contact whatever its area (mesh.split_contacts).
