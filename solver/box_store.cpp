@@ -229,7 +229,8 @@ void BoxStore::lay_out_boxes(const PatchMesh& mesh) {
     box.ar_base = ar_total_;
     ar_total_ += sb.ar_count();
     for (uint32_t p : sb.patches) {
-      std::array<int, 2> local{kBlackSide, kBlackSide};
+      LocalPatch local;
+      if (!mesh.contact_plane.empty()) local.contact = mesh.contact_plane[p];
       for (int side = 0; side < 2; ++side) {
         const int face = mesh.patch_faces[p][side];
         if (face < 0) {
@@ -240,7 +241,6 @@ void BoxStore::lay_out_boxes(const PatchMesh& mesh) {
         box.face_global.push_back(face);
       }
       box.local_faces.push_back(local);
-      if (!mesh.contact_plane.empty()) box.local_contact.push_back(mesh.contact_plane[p]);
     }
     uint32_t offset = 0;
     for (int c : sb.children) {

@@ -236,28 +236,30 @@ void transport_box_line(const BoxInputs& in, const Event* ev, size_t m, uint32_t
     for (int c = 0; c < ch; ++c) power[c] = input.quota[c] * fraction;
     send_power(from, dir, power);
   };
-  const int n = static_cast<int>(m);
   auto send_face = [&](int face, int from, int dir) {
     if (face < 0) return;
-    if (!in.box->local_contact.empty()) {
-      const int j = next_seen(from, dir, n, [&](int x, int d) {
-        return ev[x].kind == Event::patch ? face_towards(*in.box, ev[x], d) : 0;
-      });
-      if (j >= 0 && j < n && touching(*in.box, ev[from], ev[j])) {
-        face_keep(in.faces[face], acc.faces[face], allowance, ch);
-        return;
-      }
-    }
     double power[3];
     face_send(in.faces[face], acc.faces[face], allowance, ch, power);
     send_power(from, dir, power);
+  };
+  const int n = static_cast<int>(m);
+  // A face pressed against the next crossing it sees keeps its share (face_keep).
+  auto send_or_keep = [&](int face, int from, int dir) {
+    if (face < 0) return;
+    const int j = next_seen(from, dir, n, [&](int x, int d) {
+      return ev[x].kind == Event::patch ? face_towards(*in.box, ev[x], d) : 0;
+    });
+    if (j >= 0 && j < n && ev[j].kind == Event::patch && touching(*in.box, ev[from], ev[j]))
+      face_keep(in.faces[face], acc.faces[face], allowance, ch);
+    else
+      send_face(face, from, dir);
   };
   if (entry != kNoAr) send_ar(in.wall[entry], shard.wall_used[entry], -1, +1);
   for (int i = 0; i < n; ++i) {
     const Event& e = ev[i];
     if (e.kind == Event::patch) {
-      send_face(face_towards(*in.box, e, +1), i, +1);
-      send_face(face_towards(*in.box, e, -1), i, -1);
+      send_or_keep(face_towards(*in.box, e, +1), i, +1);
+      send_or_keep(face_towards(*in.box, e, -1), i, -1);
     } else {
       const uint32_t base = in.child_base[e.id];
       send_ar(in.child[base + e.exit_ar], shard.child_used[base + e.exit_ar], i, +1);
