@@ -310,6 +310,49 @@ TEST(Contact, RandomRoomsKeepTheirTouchingSidesDarkInEveryMethod) {
   }
 }
 
+// An emitting box (reflectance rho1, exitance E on every face) standing on a
+// grey tile (rho2) of exactly its footprint, in a black room: the box's
+// bottom and the tile see only each other, so the bottom's emission bounces
+// between them until absorbed, B_bottom = E / (1 - rho1 rho2) and B_tile =
+// rho2 E / (1 - rho1 rho2), exactly (the first shot's closed form; the two
+// rectangles mesh alike, so each bottom patch lies on one tile patch). All
+// of it is absorbed, none reaches the room.
+TEST(Contact, AnEmitterOnATileLightsItInClosedForm) {
+  const double rho1 = 0.6, rho2 = 0.8, radiance = 2.0, e = std::numbers::pi * radiance;
+  Scene s;
+  s.file = "tile";
+  const int black = test::add_material(s, "black", 0.0, 0.0);
+  const int grey = test::add_material(s, "grey", rho2, 0.0);
+  const int lamp = test::add_material(s, "lamp", rho1, radiance);
+  test::add_box(s, {0, 0, 0}, {4, 4, 3}, true, black, test::add_object(s, "room"));
+  const int tile = test::add_object(s, "tile");
+  test::add_quad(s, {1.5, 1.5, 1}, {2.1, 1.5, 1}, {2.1, 1.9, 1}, {1.5, 1.9, 1}, grey, tile);
+  const int box = test::add_object(s, "box");
+  test::add_box(s, {1.5, 1.5, 1}, {2.1, 1.9, 1.3}, false, lamp, box);
+  Options o = test::test_options(200'000, 200'000, 0.02);
+  o.solver.iterations = 10;
+  o.solver.tolerance = 1e-6;
+  const test::Solved r = test::solve_classic_in_memory(s, o);
+  EXPECT_LT(std::fabs(r.state.energy_residual()) / r.state.emitted_total(), 1e-10);
+  double tile_power = 0;
+  int tile_faces = 0, bottom_faces = 0;
+  for (size_t f = 0; f < r.state.faces; ++f) {
+    const Patch& p = r.mesh.patches[r.mesh.face_patch[f]];
+    const double b = r.state.radiosity(r.mesh, f)[0];
+    if (p.object == tile) {
+      EXPECT_NEAR(b, rho2 * e / (1 - rho1 * rho2), 1e-9 * e) << "tile face " << f;
+      tile_power += b * r.mesh.face_area(static_cast<int>(f));
+      ++tile_faces;
+    } else if (p.object == box && p.normal.z < -0.5) {
+      EXPECT_NEAR(b, e / (1 - rho1 * rho2), 1e-9 * e) << "bottom face " << f;
+      ++bottom_faces;
+    }
+  }
+  EXPECT_GT(tile_faces, 4);
+  EXPECT_EQ(tile_faces, bottom_faces);
+  EXPECT_NEAR(tile_power, rho2 * e * 0.6 * 0.4 / (1 - rho1 * rho2), 1e-9 * e);
+}
+
 // A furnace with furniture pressed on the floor and on each other stays
 // exact when split: the covered sides form closed cavities of their own.
 TEST(Contact, AFurnaceWithContactsStaysExactWhenSplit) {
