@@ -1,5 +1,6 @@
 #include "preprocess.h"
 
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
@@ -21,6 +22,7 @@
 #include "line_tracing.h"
 #include "manifest.h"
 #include "mpath_version.h"
+#include "pilot.h"
 #include "prepared_scene.h"
 #include "process_memory.h"
 #include "progress.h"
@@ -218,7 +220,18 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   auto t = clock::now();
   const Hierarchy hierarchy = store_hierarchy(options, mesh);
   stats.hierarchy_seconds = seconds(clock::now() - t);
-  const std::vector<uint64_t> budget = box_line_budget(hierarchy, options.lines);
+  std::vector<double> pilot;
+  if (options.lines.box_budget == "pilot" && hierarchy.boxes.size() > 1) {
+    t = clock::now();
+    pilot = pilot_weights(prepared.scene, mesh, hierarchy, options.lines.seed,
+                          static_cast<uint64_t>(options.lines.pilot));
+    spdlog::info("pilot: {} local and {} global lines ({:.2f} s){}", options.lines.pilot, options.lines.pilot, seconds(clock::now() - t),
+                 pilot.empty() ? ": nothing emits, the subscenes share by quotient" : "");
+  }
+  const std::vector<uint64_t> budget = box_line_budget(hierarchy, options.lines, pilot);
+  if (!pilot.empty())
+    spdlog::info("pilot budget: {:.1f} % of the lines in the root, the subscenes {}", 100.0 * budget[0] /
+                 static_cast<double>(options.lines.total), fmt::join(budget.begin() + 1, budget.end(), ", "));
   spdlog::info("hierarchy: {} box(es), depth {} ({:.2f} s)", hierarchy.boxes.size(), hierarchy.max_depth(),
                stats.hierarchy_seconds);
   if (print_hierarchy) {

@@ -242,6 +242,7 @@ TEST(LineSets, WithoutSubsceneLinesTheyAreStoredLineMultipath) {
     o.store.dir = dir / (method == SolverMethod::multipath ? "m" : "h");
     o.solver.method = method;
     o.solver.adaptive_lines = false;
+    o.lines.box_budget = "quotient";
     o.lines.root_fraction = 1.0;
     return test::solve_stored(o);
   };

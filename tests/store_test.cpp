@@ -388,8 +388,10 @@ TEST(Store, DamageBehindAMatchingManifestIsFoundWhileStreaming) {
   const std::string room = std::string(MPATH_SOURCE_DIR) + "/configs/room.toml";
   for (const std::string transport : {"transmittance", "lines"}) {
     const auto store = dir / transport;
+    // (Shared by quotient, every box holds chunks for the damage to land in.)
     const std::string args = " -q lines.total=300000 store.chunk_lines=4096 first_shot.lines=50000 output.png=false "
-                             "output.exr=false hierarchy.transport=" + transport + " store.dir=" + store.string() +
+                             "output.exr=false lines.box_budget=quotient hierarchy.transport=" + transport +
+                             " store.dir=" + store.string() +
                              " output.dir=" + (dir / "out").string();
     ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + room + args).exit_code, 0);
     for (const std::string name : {"box0001.lines", "box0003.lines"}) {

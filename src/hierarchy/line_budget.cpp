@@ -8,13 +8,67 @@ namespace mpath {
 
 namespace {
 
+// The pilot budget (docs/algorithm.md, "Pilot budget"): a face's share of
+// the squared error is about B^2 / (lines per unit of surface of the boxes
+// whose lines cross it), whatever its area; the root's lines cross every
+// face, a subscene's its own. With W_b the sum of B^2 over box b's faces and
+// rho_b = L_b / S_b (S_b: the surface of the box its lines are drawn over),
+// the error W_0 / rho_0 + sum_b W_b / (rho_0 + rho_b) is least, for a given
+// rho_0, at rho_b = max(0, sqrt(W_b / (lambda S_b)) - rho_0), lambda such
+// that the lines add up; rho_0 is scanned over the root fractions allowed.
+std::vector<double> pilot_lines(const Hierarchy& h, double total, const std::vector<double>& w) {
+  const size_t n = h.boxes.size();
+  std::vector<double> area(n);
+  for (size_t b = 0; b < n; ++b) area[b] = line_box(h.boxes[b].bounds).surface_area();
+  std::vector<double> best;
+  double best_error = INFINITY;
+  std::vector<double> want(n);
+  constexpr int kSteps = 200;
+  for (int step = 0; step <= kSteps; ++step) {
+    const double fraction = kPilotRootFraction[0] + (kPilotRootFraction[1] - kPilotRootFraction[0]) * step / kSteps;
+    const double root = total * fraction, rho0 = root / area[0], rest = total - root;
+    auto spread = [&](double lambda) {
+      double used = 0;
+      for (size_t b = 1; b < n; ++b) {
+        want[b] = area[b] * std::max(0.0, std::sqrt(w[b] / (lambda * area[b])) - rho0);
+        used += want[b];
+      }
+      return used;
+    };
+    double lo = 1e-300, hi = 1e300;  // spread(lo) >= rest >= spread(hi), on a log scale
+    for (int k = 0; k < 200; ++k) {
+      const double mid = std::sqrt(lo * hi);
+      (spread(mid) > rest ? lo : hi) = mid;
+    }
+    spread(hi);
+    want[0] = root;
+    double error = w[0] / rho0;
+    for (size_t b = 1; b < n; ++b) error += w[b] / (rho0 + want[b] / area[b]);
+    if (error < best_error) {
+      best_error = error;
+      best = want;
+    }
+  }
+  // What the scan left unspent (rounding of lambda) goes to the root.
+  double spent = 0;
+  for (double x : best) spent += x;
+  best[0] += total - spent;
+  return best;
+}
+
 // Lines each box would get before the floor of 4 lines per AR.
-std::vector<double> wanted_lines(const Hierarchy& h, const LineOptions& lines) {
+std::vector<double> wanted_lines(const Hierarchy& h, const LineOptions& lines, const std::vector<double>& pilot) {
   const double total = static_cast<double>(lines.total);
   if (h.boxes.size() == 1) return {total};
+  if (lines.box_budget == "pilot" && pilot.size() == h.boxes.size()) {
+    double sub = 0;
+    for (size_t b = 1; b < pilot.size(); ++b) sub += pilot[b];
+    if (sub > 0 && pilot[0] > 0) return pilot_lines(h, total, pilot);
+  }
   // Paper 3.3.1: root_fraction in the root, the rest by quotient (or objects)...
   const double root = total * lines.root_fraction;
   double weights = 0;
+  // ("pilot" without a pilot, as when nothing emits: by quotient.)
   auto weight = [&](const SceneBox& b) { return lines.box_budget == "objects" ? double(b.objects_total) : b.quotient; };
   for (size_t b = 1; b < h.boxes.size(); ++b) weights += weight(h.boxes[b]);
   // ...but no subscene sampled more thinly than min_density times the root's
@@ -40,8 +94,8 @@ std::vector<double> wanted_lines(const Hierarchy& h, const LineOptions& lines) {
 
 }  // namespace
 
-std::vector<uint64_t> box_line_budget(const Hierarchy& h, const LineOptions& lines) {
-  const std::vector<double> want = wanted_lines(h, lines);
+std::vector<uint64_t> box_line_budget(const Hierarchy& h, const LineOptions& lines, const std::vector<double>& pilot) {
+  const std::vector<double> want = wanted_lines(h, lines, pilot);
   std::vector<uint64_t> out(h.boxes.size(), 0);
   out[0] = std::max<uint64_t>(1, static_cast<uint64_t>(std::llround(want[0])));
   for (size_t b = 1; b < h.boxes.size(); ++b)
@@ -50,7 +104,7 @@ std::vector<uint64_t> box_line_budget(const Hierarchy& h, const LineOptions& lin
 }
 
 void fit_vp_grids(Hierarchy& h, const LineOptions& lines) {
-  const std::vector<double> want = wanted_lines(h, lines);
+  const std::vector<double> want = wanted_lines(h, lines, {});
   for (size_t b = 1; b < h.boxes.size(); ++b) {
     SceneBox& box = h.boxes[b];
     // Halve the finest grid until the box's lines cross each AR 8 times on average.
