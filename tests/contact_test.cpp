@@ -142,6 +142,18 @@ TEST(Contact, RandomFramesSplitTheWallIntoWhatTheyCoverAndTheRest) {
   }
 }
 
+// A closed grey room 4 x 4 x 3 (rho 0.6) lit by a patch of its ceiling;
+// returns the grey material.
+int lit_room(Scene& s) {
+  s.file = "room";
+  const int grey = test::add_material(s, "grey", 0.6, 0.0);
+  const int lamp = test::add_material(s, "lamp", 0.0, 10.0);
+  test::add_box(s, {0, 0, 0}, {4, 4, 3}, true, grey, test::add_object(s, "room"));
+  test::add_quad(s, {1.5, 1.5, 2.999}, {1.5, 2.5, 2.999}, {2.5, 2.5, 2.999}, {2.5, 1.5, 2.999}, lamp,
+                 test::add_object(s, "lamp"));
+  return grey;
+}
+
 // A closed room lit by a patch of its ceiling, a frame pressed against a wall.
 // The frame's back and the wall under it see only each other: no light
 // reaches them, so the back stays dark, with the wall's patches straddling
@@ -150,12 +162,7 @@ TEST(Contact, RandomFramesSplitTheWallIntoWhatTheyCoverAndTheRest) {
 // part, which shows the check can fail.
 double frame_back_radiosity(bool split, double max_patch_area, bool contacts = true) {
   Scene s;
-  s.file = "room";
-  const int grey = test::add_material(s, "grey", 0.6, 0.0);
-  const int lamp = test::add_material(s, "lamp", 0.0, 10.0);
-  test::add_box(s, {0, 0, 0}, {4, 4, 3}, true, grey, test::add_object(s, "room"));
-  test::add_quad(s, {1.5, 1.5, 2.999}, {1.5, 2.5, 2.999}, {2.5, 2.5, 2.999}, {2.5, 1.5, 2.999}, lamp,
-                 test::add_object(s, "lamp"));
+  const int grey = lit_room(s);
   test::add_box(s, {0, 1.3, 1.1}, {0.04, 2.1, 1.7}, false, grey, test::add_object(s, "frame"));
   if (split) EXPECT_EQ(split_contacts(s).pairs, 1u);
   Options o = test::test_options(400'000, 200'000, max_patch_area);
@@ -207,12 +214,7 @@ RandomRoom random_room(unsigned seed) {
   std::uniform_real_distribution<double> u(0, 1);
   RandomRoom r;
   Scene& s = r.scene;
-  s.file = "room";
-  const int grey = test::add_material(s, "grey", 0.6, 0.0);
-  const int lamp = test::add_material(s, "lamp", 0.0, 10.0);
-  test::add_box(s, {0, 0, 0}, {4, 4, 3}, true, grey, test::add_object(s, "room"));
-  test::add_quad(s, {1.5, 1.5, 2.999}, {1.5, 2.5, 2.999}, {2.5, 2.5, 2.999}, {2.5, 1.5, 2.999}, lamp,
-                 test::add_object(s, "lamp"));
+  const int grey = lit_room(s);
   for (int k = 0; k < 3; ++k) {  // frames on the wall x = 0, apart along y
     const double y0 = 0.2 + 1.25 * k + 0.3 * u(rng), w = 0.2 + 0.6 * u(rng), z0 = 0.5 + u(rng), h = 0.2 + u(rng);
     r.covered_objects.push_back(test::add_object(s, "frame"));

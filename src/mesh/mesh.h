@@ -38,8 +38,9 @@ struct PatchMesh {
   std::vector<std::array<int, 2>> patch_faces;
   std::vector<int> face_patch;     // face -> patch
   std::vector<uint8_t> face_side;  // face -> 0 front, 1 back
-  // Per patch: its polygon's contact plane (contact.h), or -1; empty when
-  // no plane of the scene holds polygons facing both ways.
+  // Per patch: its polygon's contact plane (contact.h) where the patch may
+  // touch another surface (its box overlaps one its polygon touches), else
+  // -1; empty when no patch touches anything.
   std::vector<int> contact_plane;
   double max_patch_area = 0;
   size_t dropped_polygons = 0;     // degenerate polygons left out
