@@ -161,6 +161,23 @@ TEST(PilotBudget, SpendsTheLinesWhereItsModelSaysTheErrorIs) {
   EXPECT_EQ(box_line_budget(h, o, {}), box_line_budget(h, q, {}));
 }
 
+// The pilot budget end to end on the shipped ROOM: the store is made,
+// names its budget in its identity, and solves with energy balanced.
+TEST(PilotBudget, MakesAStoreThatSolves) {
+  test::TempDir dir;
+  Options o = load_options(std::string(MPATH_SOURCE_DIR) + "/configs/room.toml", {});
+  o.lines.total = 300'000;
+  o.first_shot.lines = 100'000;
+  o.lines.box_budget = "pilot";
+  o.store.dir = dir / "store";
+  const test::StoredSolve s = test::solve_stored(o);
+  EXPECT_TRUE(s.log.converged);
+  EXPECT_GE(s.boxes, 2u);
+  EXPECT_LT(std::fabs(s.state.energy_residual()) / s.state.emitted_total(), 1e-10);
+  const auto manifest = nlohmann::json::parse(test::read_file(dir / "store/manifest.json"));
+  EXPECT_EQ(manifest["identity"]["lines.box_budget"], "pilot of 200000 lines") << manifest["identity"].dump();
+}
+
 TEST(Hierarchy, TwoFarApartTablesBuildTwoSubscenesAndALonePolygonNone) {
   const PatchMesh mesh = build_mesh(furnished_room(0.5, 0), 0.05);
   const Hierarchy h = build_hierarchy(mesh, HierarchyOptions{}, false);

@@ -404,9 +404,10 @@ std::vector<ConfigKey> make_table() {
       {"lines.root_fraction", "share of lines in the root box (hierarchical method, `lines.box_budget` `\"quotient\"` or `\"objects\"`)",
        SET(o.lines.root_fraction = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.lines.root_fraction)},
       {"lines.box_budget",
-       "how the boxes share the lines: `\"pilot\"` (a cheap pilot of `lines.pilot` local and global lines estimates "
-       "where the error lies and sets the root's share, at least 2/3, and the subscenes'; see algorithm.md), or "
-       "`lines.root_fraction` in the root and the rest by grouping `\"quotient\"` or by `\"objects\"`",
+       "how the boxes share the lines: `lines.root_fraction` in the root and the rest by grouping `\"quotient\"` or "
+       "by `\"objects\"`, or `\"pilot\"` (a cheap pilot of `lines.pilot` local and global lines estimates where the "
+       "error lies and sets the root's share, at least 2/3, and the subscenes'; less error at equal lines, but the "
+       "store's lines then depend on the materials; see algorithm.md)",
        SET(o.lines.box_budget = get_choice(n, s, "budget", {"quotient", "objects", "pilot"})), GET(o.lines.box_budget)},
       {"lines.pilot", "local lines from the emitters and global lines of the pilot of `lines.box_budget = \"pilot\"`",
        SET(o.lines.pilot = positive_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.lines.pilot))},

@@ -24,10 +24,10 @@ struct HierarchyOptions {
 struct LineOptions {
   long long total = 1'000'000;
   double root_fraction = 0.8;  // docs/algorithm.md (the paper: 2/3)
-  // How the lines are shared: "pilot" (preprocess/pilot.h, docs/algorithm.md,
-  // "Pilot budget"), or root_fraction in the root and the rest by the
-  // subscenes' grouping "quotient" or "objects" count (paper 3.3.1).
-  std::string box_budget = "pilot";
+  // How the lines are shared: root_fraction in the root and the rest by the
+  // subscenes' grouping "quotient" or "objects" count (paper 3.3.1), or
+  // "pilot" (preprocess/pilot.h, docs/algorithm.md, "Pilot budget").
+  std::string box_budget = "quotient";
   long long pilot = 200'000;  // local and global lines of the "pilot" budget (preprocess/pilot.h)
   // No subscene gets fewer lines per unit of box surface than this times
   // the root's (docs/algorithm.md).
