@@ -1,6 +1,7 @@
 #include "pilot.h"
 
 #include <algorithm>
+#include <numbers>
 
 #include "box_geometry.h"
 #include "line_order.h"
@@ -23,7 +24,7 @@ std::vector<double> pilot_weights(const Scene& scene, const PatchMesh& mesh, con
   double total = 0;
   for (size_t f = 0; f < faces; ++f) {
     const Patch& p = mesh.patches[mesh.face_patch[f]];
-    const double power = 3.14159265358979323846 * mean(scene.materials[p.material].emission) * p.area;
+    const double power = std::numbers::pi * mean(scene.materials[p.material].emission) * p.area;
     if (!(power > 0)) continue;
     emitters.push_back(static_cast<int>(f));
     total += power;
