@@ -65,8 +65,7 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
       // A face that may touch another shoots locally: what it emits where
       // it touches stays there (receive_in_contact), which a global line
       // cannot tell apart.
-      const bool may_touch = !mesh.contact_plane.empty() && mesh.contact_plane[mesh.face_patch[f]] >= 0;
-      if (!may_touch && global_crossings[f] >= static_cast<double>(counts[e])) {
+      if (!mesh.may_touch(mesh.face_patch[f]) && global_crossings[f] >= static_cast<double>(counts[e])) {
         for (int c = 0; c < state.channels; ++c) state.unshot[state.at(f, c)] += state.emitted_power[state.at(f, c)];
         ++stats.global_emitter_faces;
       } else {

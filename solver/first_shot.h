@@ -43,7 +43,7 @@ void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int fa
   const int patch = mesh.face_patch[face];
   const Vec3 n = mesh.face_normal(face);
   const Vec3 org = uniform_point(mesh, mesh.patches[patch], rng);
-  if (!mesh.contact_plane.empty() && mesh.contact_plane[patch] >= 0) {
+  if (mesh.may_touch(patch)) {
     // Where the face touches another, a line along the normal meets it at
     // distance 0, whatever the direction the cosine draws next (grazing
     // lines may slip past a surface at distance 0).

@@ -189,6 +189,19 @@ struct alignas(128) SetShard {
   }
 };
 
+// Power `kept` at `face` for channel c, held for sending on: the share of
+// it the box's own classes carry goes along the face's next crossing in
+// this pass, the rest waits for the boxes above.
+inline void hold(const FaceIn& f, FaceAcc& fa, std::vector<FaceLater>& later, int face, int c, double kept) {
+  if (const double share = f.carried_share(); share < 1) {
+    const double now = kept * share;
+    fa.gathered[c] += now;
+    later[face].later[c] += kept - now;
+  } else {
+    fa.gathered[c] += kept;
+  }
+}
+
 struct PassContext {
   const StoreBox* box;
   const LineSetBox* lines;
@@ -266,12 +279,7 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       if (j >= 0 && j < n && touching(box, ev[i], ev[j])) {
         // Pressed against the next surface: the share stays with the face,
         // as what it gathers does (docs/scene-formats.md, "Surfaces in contact").
-        const double now = from.carried_share();
-        for (int c = 0; c < ch; ++c) {
-          const double kept = input.quota[c] * share;
-          fa.gathered[c] += kept * now;
-          if (now < 1) shard.later[face].later[c] += kept * (1 - now);
-        }
+        for (int c = 0; c < ch; ++c) hold(from, fa, shard.later, face, c, input.quota[c] * share);
         continue;
       }
       SetShard::Send s{j, dir, {0, 0, 0}};
@@ -304,13 +312,7 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       const double kept = f.rho[c] * s.power[c];
       fa.phi_gain[c] += kept;
       shard.absorbed[c] += s.power[c] - kept;
-      if (const double share = f.carried_share(); share < 1) {
-        const double now = kept * share;
-        fa.gathered[c] += now;
-        shard.later[face].later[c] += kept - now;
-      } else {
-        fa.gathered[c] += kept;
-      }
+      hold(f, fa, shard.later, face, c, kept);
     }
   }
 }

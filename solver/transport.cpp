@@ -91,7 +91,7 @@ void transport_line(const PassInputs& in, const std::vector<LineHit>& hits, Shar
   auto send_from = [&](int face, int i, int dir) {
     if (face < 0) return;
     Send out{i + dir, dir > 0, {0, 0, 0}};
-    if (!mesh.contact_plane.empty() && mesh.contact_plane[hits[i].patch] >= 0) {
+    if (mesh.may_touch(hits[i].patch)) {
       const int j = next_seen(i, dir, static_cast<int>(n), towards);
       if (j >= 0 && j < static_cast<int>(n) && mesh.touching(hits[i].patch, hits[j].patch)) {
         face_keep(in.faces[face], acc.faces[face], acc.allowance, ch);

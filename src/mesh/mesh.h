@@ -60,9 +60,9 @@ struct PatchMesh {
   // Whether crossings of patches `a` and `b` that are neighbours on a line
   // touch: both lie on one contact plane, so the faces they turn towards
   // each other are pressed together and exchange nothing.
-  bool touching(int a, int b) const {
-    return !contact_plane.empty() && contact_plane[a] >= 0 && contact_plane[a] == contact_plane[b];
-  }
+  bool touching(int a, int b) const { return may_touch(a) && contact_plane[a] == contact_plane[b]; }
+  // Whether `patch` has a contact plane (may touch its neighbour on a line).
+  bool may_touch(int patch) const { return !contact_plane.empty() && contact_plane[patch] >= 0; }
 };
 
 // The most patches a mesh may have (about 10 GB of memory in all).
