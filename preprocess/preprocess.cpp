@@ -218,7 +218,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   const PatchMesh& mesh = prepared.mesh;
   PreprocessStats stats;
   auto t = clock::now();
-  const Hierarchy hierarchy = store_hierarchy(options, mesh);
+  const Hierarchy hierarchy = store_hierarchy(options, mesh, nullptr, &prepared.scene);
   stats.hierarchy_seconds = seconds(clock::now() - t);
   std::vector<double> pilot;
   if (options.lines.box_budget == "pilot" && hierarchy.boxes.size() > 1) {

@@ -50,9 +50,16 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
   };
 }
 
-Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh, const std::vector<BoxLayout>* layout) {
+Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh, const std::vector<BoxLayout>* layout,
+                          const Scene* scene) {
+  std::vector<uint8_t> emitting;
+  if (scene && options.lines.box_budget == "pilot" && options.hierarchy.transport == "lines") {
+    emitting.resize(mesh.patches.size(), 0);
+    for (size_t p = 0; p < mesh.patches.size(); ++p) emitting[p] = scene->materials[mesh.patches[p].material].emits();
+  }
   Hierarchy h = layout ? assemble_hierarchy(mesh, options.hierarchy, *layout)
-                       : build_hierarchy(mesh, options.hierarchy, options.solver.method != SolverMethod::hierarchical);
+                       : build_hierarchy(mesh, options.hierarchy, options.solver.method != SolverMethod::hierarchical,
+                                         false, emitting);
   if (h.boxes.size() > 1 && options.hierarchy.transport == "lines") make_boxes_transparent(h);
   else if (options.hierarchy.vp_grid <= 0) fit_vp_grids(h, options.lines);
   return h;

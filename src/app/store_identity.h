@@ -22,6 +22,9 @@ std::string mesh_hash(const PatchMesh& mesh);
 // its VP grids fitted to lines.total unless hierarchy.vp_grid is set. With
 // `layout` (a store's record of its boxes) the boxes are assembled from it
 // instead of grouping again (InputError when it cannot be this mesh's).
-Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh, const std::vector<BoxLayout>* layout = nullptr);
+// With lines.box_budget = "pilot" and the line sets, the grouping is given
+// `scene`'s emitters and makes bright subscenes (docs/algorithm.md).
+Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh, const std::vector<BoxLayout>* layout = nullptr,
+                          const Scene* scene = nullptr);
 
 }  // namespace mpath

@@ -406,8 +406,9 @@ std::vector<ConfigKey> make_table() {
       {"lines.box_budget",
        "how the boxes share the lines: `lines.root_fraction` in the root and the rest by grouping `\"quotient\"` or "
        "by `\"objects\"`, or `\"pilot\"` (a cheap pilot of `lines.pilot` local and global lines estimates where the "
-       "error lies and sets the root's share, at least 2/3, and the subscenes'; less error at equal lines, but the "
-       "store's lines then depend on the materials; see algorithm.md)",
+       "error lies and sets the root's share, at least 2/3, and the subscenes', and a lamp's small group below "
+       "`hierarchy.max_depth` is a subscene of its own; less error at equal lines, but the store's lines and boxes "
+       "then depend on the materials; see algorithm.md)",
        SET(o.lines.box_budget = get_choice(n, s, "budget", {"quotient", "objects", "pilot"})), GET(o.lines.box_budget)},
       {"lines.pilot", "local lines from the emitters and global lines of the pilot of `lines.box_budget = \"pilot\"`",
        SET(o.lines.pilot = positive_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.lines.pilot))},

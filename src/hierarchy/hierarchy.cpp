@@ -37,6 +37,10 @@ constexpr size_t kMinPolygons = 24;
 // ...and has at most this share of the surface of the box it is in (a box
 // nearly as large as its parent adds a level and nothing else).
 constexpr double kMaxNesting = 0.5;
+// A group holding an emitter below max_depth is a box of its own (a lamp in
+// its shade) when its surface is at most this share of the box it would be
+// dissolved into (docs/algorithm.md, "Bright subscenes").
+constexpr double kBrightShare = 1.0 / 16.0;
 
 Bounds merged(const Bounds& a, const Bounds& b) {
   Bounds m = a;
@@ -200,7 +204,8 @@ struct Item {
 
 class Builder {
  public:
-  Builder(const PatchMesh& mesh, const HierarchyOptions& options) : mesh_(mesh), options_(options) {
+  Builder(const PatchMesh& mesh, const HierarchyOptions& options, const std::vector<uint8_t>& emitting = {})
+      : mesh_(mesh), options_(options), emitting_(emitting) {
     int objects = 0;
     for (const Patch& p : mesh.patches) objects = std::max(objects, p.object + 1);
     object_patches_.resize(objects);
@@ -616,30 +621,66 @@ class Builder {
     return n;
   }
 
+  // Does the item hold a patch that emits (the `emitting` flags given)?
+  bool item_lit(int item) const {
+    if (emitting_.empty()) return false;
+    if (items_[item].object >= 0) {
+      for (uint32_t p : object_patches_[items_[item].object])
+        if (emitting_[p]) return true;
+      return false;
+    }
+    for (int m : items_[item].members)
+      if (item_lit(m)) return true;
+    return false;
+  }
+
+  // A group that may be a bright subscene: it holds an emitter and enough
+  // polygons to pay for a box.
+  bool bright_candidate(int item) const {
+    return items_[item].object < 0 && item_polygons(item) >= kMinPolygons && item_lit(item);
+  }
+
   // Puts `items` into box `box` (of surface area `area`): objects directly,
   // groups as child boxes, except groups that would not pay as subscenes,
   // whose contents go into `box` instead: deeper than max_depth, holding
-  // fewer than kMinPolygons polygons, or nearly as large as `box`.
-  void place(Hierarchy& h, int box, const std::vector<int>& items, double area) {
+  // fewer than kMinPolygons polygons, or nearly as large as `box`. Below
+  // max_depth, the smallest group around an emitter that is small beside
+  // `box` is a box of its own all the same (bright subscenes, made only when
+  // the emitters are given). `flatten`: every group's contents go into `box`
+  // (a bright box holds its contents directly).
+  void place(Hierarchy& h, int box, const std::vector<int>& items, double area, bool flatten = false) {
     for (int i : items) {
       const Item& it = items_[i];
       if (it.object >= 0) {
         h.boxes[box].objects.push_back(it.object);
         continue;
       }
-      if (h.boxes[box].depth + 1 > options_.max_depth || item_polygons(i) < kMinPolygons ||
-          it.area > kMaxNesting * area) {
-        place(h, box, it.members, area);
+      const bool too_deep = h.boxes[box].depth + 1 > options_.max_depth;
+      if (too_deep && !flatten && bright_candidate(i) && it.area <= kBrightShare * area) {
+        // The smallest such group: go down while a member group still qualifies.
+        const bool smaller = std::any_of(it.members.begin(), it.members.end(), [&](int m) { return bright_candidate(m); });
+        if (smaller) place(h, box, it.members, area);
+        else add_box(h, box, i, true);
         continue;
       }
-      const int child = static_cast<int>(h.boxes.size());
-      h.boxes.emplace_back();
-      h.boxes[child].parent = box;
-      h.boxes[child].depth = h.boxes[box].depth + 1;
-      h.boxes[child].quotient = it.quotient;
-      h.boxes[box].children.push_back(child);
-      place(h, child, it.members, it.area);
+      if (too_deep || flatten || item_polygons(i) < kMinPolygons || it.area > kMaxNesting * area) {
+        place(h, box, it.members, area, flatten);
+        continue;
+      }
+      add_box(h, box, i, false);
     }
+  }
+
+  // Makes group `item` a child box of `box`; a bright box holds all of its contents directly.
+  void add_box(Hierarchy& h, int box, int item, bool bright) {
+    const Item& it = items_[item];
+    const int child = static_cast<int>(h.boxes.size());
+    h.boxes.emplace_back();
+    h.boxes[child].parent = box;
+    h.boxes[child].depth = h.boxes[box].depth + 1;
+    h.boxes[child].quotient = it.quotient;
+    h.boxes[box].children.push_back(child);
+    place(h, child, it.members, it.area, bright);
   }
 
   void finish_box(Hierarchy& h, int b) {
@@ -697,6 +738,7 @@ class Builder {
 
   const PatchMesh& mesh_;
   HierarchyOptions options_;
+  const std::vector<uint8_t>& emitting_;  // per patch; empty: no bright subscenes
   std::vector<std::vector<uint32_t>> object_patches_;
   std::vector<size_t> object_polygons_;
   std::vector<Bounds> object_bounds_;
@@ -742,10 +784,11 @@ Hierarchy assemble_hierarchy(const PatchMesh& mesh, const HierarchyOptions& opti
   return builder.assemble(layout);
 }
 
-Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat, bool all_pairs) {
+Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat, bool all_pairs,
+                          const std::vector<uint8_t>& emitting) {
   HierarchyOptions o = options;
   if (flat) o.max_depth = 0;
-  Builder builder(mesh, o);
+  Builder builder(mesh, o, emitting);
   if (o.max_depth > 0) builder.group(all_pairs);
   return builder.finish();
 }

@@ -55,8 +55,12 @@ struct Hierarchy {
 // root alone. Deterministic for a given mesh and options. Candidate pairs and
 // intruding items are found in a spatial grid of the items; `all_pairs`
 // compares every pair instead (quadratic: the reference the tests hold the
-// grid's result to, which must be the same hierarchy).
-Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat, bool all_pairs = false);
+// grid's result to, which must be the same hierarchy). `emitting` (per
+// patch, or empty): below max_depth, the smallest group around an emitter
+// that is small beside its box is a box of its own (bright subscenes,
+// docs/algorithm.md; the pilot budget asks for them).
+Hierarchy build_hierarchy(const PatchMesh& mesh, const HierarchyOptions& options, bool flat, bool all_pairs = false,
+                          const std::vector<uint8_t>& emitting = {});
 
 // What grouping decided, per box: enough to assemble the hierarchy again
 // from the mesh without grouping (a store records it; docs/store-format.md).

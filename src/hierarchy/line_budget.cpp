@@ -9,41 +9,59 @@ namespace mpath {
 namespace {
 
 // The pilot budget (docs/algorithm.md, "Pilot budget"): a face's share of
-// the squared error is about B^2 / (lines per unit of surface of the boxes
-// whose lines cross it), whatever its area; the root's lines cross every
-// face, a subscene's its own. With W_b the sum of B^2 over box b's faces and
-// rho_b = L_b / S_b (S_b: the surface of the box its lines are drawn over),
-// the error W_0 / rho_0 + sum_b W_b / (rho_0 + rho_b) is least, for a given
-// rho_0, at rho_b = max(0, sqrt(W_b / (lambda S_b)) - rho_0), lambda such
-// that the lines add up; rho_0 is scanned over the root fractions allowed.
+// the squared error is about B^2 / R, R the lines per unit of surface of
+// every box whose lines cross it (the line sets: its own box's and every
+// ancestor's), whatever its area. With W_b the sum of B^2 over box b's own
+// faces, rho_b = L_b / S_b (S_b: the surface of the box its lines are drawn
+// over) and R_b the sum of rho over b and its ancestors, the error
+// sum_b W_b / R_b is least, for a given rho_0, where W_b / R_b^2 = lambda
+// S_b (a box with lines of its own whose children have theirs), that is
+// R_b = max(R_parent, sqrt(W_b / (lambda S_b))), lambda such that the lines
+// add up; a child that would get no lines of its own (R_child = R_b) counts
+// its subtree's W in its parent's W instead. rho_0 is scanned over the root
+// fractions allowed. One level deep, this is rho_b = max(0, sqrt(W_b /
+// (lambda S_b)) - rho_0).
 std::vector<double> pilot_lines(const Hierarchy& h, double total, const std::vector<double>& w) {
   const size_t n = h.boxes.size();
-  std::vector<double> area(n);
+  std::vector<double> area(n), subtree(w.begin(), w.end());
   for (size_t b = 0; b < n; ++b) area[b] = line_box(h.boxes[b].bounds).surface_area();
+  for (size_t b = n; b-- > 1;) subtree[static_cast<size_t>(h.boxes[b].parent)] += subtree[b];  // parents come first
   std::vector<double> best;
   double best_error = INFINITY;
-  std::vector<double> want(n);
+  std::vector<double> want(n), reach(n), weight(n);  // lines, R and the W each box's R is fitted to
   constexpr int kSteps = 200;
+  // Given rho_0 and lambda: R of every box top-down (parents before children).
+  auto fit = [&](double rho0, double lambda) {
+    reach[0] = rho0;
+    double used = 0;
+    for (size_t b = 1; b < n; ++b) {
+      const SceneBox& box = h.boxes[b];
+      const double above = reach[static_cast<size_t>(box.parent)];
+      auto r = [&](double x, size_t k) { return std::max(above, std::sqrt(x / (lambda * area[k]))); };
+      // Own W, and the subtree of each child that would not rise above this box's R.
+      weight[b] = w[b];
+      double rb = r(w[b], b);
+      for (int c : box.children)
+        if (std::sqrt(subtree[c] / (lambda * area[c])) <= rb) weight[b] += subtree[c];
+      rb = r(weight[b], b);
+      reach[b] = rb;
+      want[b] = area[b] * (rb - above);
+      used += want[b];
+    }
+    return used;
+  };
   for (int step = 0; step <= kSteps; ++step) {
     const double fraction = kPilotRootFraction[0] + (kPilotRootFraction[1] - kPilotRootFraction[0]) * step / kSteps;
     const double root = total * fraction, rho0 = root / area[0], rest = total - root;
-    auto spread = [&](double lambda) {
-      double used = 0;
-      for (size_t b = 1; b < n; ++b) {
-        want[b] = area[b] * std::max(0.0, std::sqrt(w[b] / (lambda * area[b])) - rho0);
-        used += want[b];
-      }
-      return used;
-    };
-    double lo = 1e-300, hi = 1e300;  // spread(lo) >= rest >= spread(hi), on a log scale
+    double lo = 1e-300, hi = 1e300;  // fit(lo) >= rest >= fit(hi), on a log scale
     for (int k = 0; k < 200; ++k) {
       const double mid = std::sqrt(lo * hi);
-      (spread(mid) > rest ? lo : hi) = mid;
+      (fit(rho0, mid) > rest ? lo : hi) = mid;
     }
-    spread(hi);
+    fit(rho0, hi);
     want[0] = root;
-    double error = w[0] / rho0;
-    for (size_t b = 1; b < n; ++b) error += w[b] / (rho0 + want[b] / area[b]);
+    double error = 0;
+    for (size_t b = 0; b < n; ++b) error += w[b] / reach[b];
     if (error < best_error) {
       best_error = error;
       best = want;
