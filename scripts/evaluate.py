@@ -41,17 +41,23 @@ SHARED = os.path.join(os.path.dirname(ROOT), "shared", "scenes")
 # references' lines.
 SCENES = {
     "room": {"title": "ROOM", "config": "configs/room.toml", "budgets": [5e5, 1e6, 2e6, 4e6],
-             "classic_extra": [8e6], "reference": 6.4e7},
+             "classic_extra": [8e6], "reference": 6.4e7, "pilot": True},
     "bigroom": {"title": "BIG ROOM", "config": "configs/bigroom.toml", "budgets": [1e6, 2e6, 4e6, 8e6],
-                "classic_extra": [1.6e7], "reference": 6.4e7},
+                "classic_extra": [1.6e7], "reference": 6.4e7, "pilot": True},
     "office": {"title": "OFFICE", "config": "configs/office.toml", "budgets": [2e6, 4e6, 8e6, 1.6e7],
-               "classic_extra": [3.2e7], "reference": 6.4e7, "seeds": 2},
+               "classic_extra": [3.2e7], "reference": 6.4e7, "seeds": 2, "pilot": True},
     "office2": {"title": "office2 (RenderPark)", "config": "configs/office2.toml", "budgets": [5e5, 1e6, 2e6, 4e6],
                 "classic_extra": [8e6], "reference": 6.4e7, "needs": os.path.join(SHARED, "office2", "office2.mgf")},
 }
 TARGETS = {"room": 2.0, "office": 4.0}  # speed-up at equal error the project aims at
+# The measured methods: a row's "method", and the settings it runs with.
+# "pilot" is the hierarchical method with lines.box_budget = "pilot" (its
+# budget and bright subscenes; docs/algorithm.md), run on the scenes whose
+# spec says "pilot" (where it would make the same store, it is not run).
+METHODS = {"classic": ["solver.method=classic"], "hierarchical": ["solver.method=hierarchical"],
+           "pilot": ["solver.method=hierarchical", "lines.box_budget=pilot"]}
 REFERENCE_SEED = 977
-COMMON = ["output.png=false", "output.exr=false", "solver.method={method}", "lines.total={lines}",
+COMMON = ["output.png=false", "output.exr=false", "lines.total={lines}",
           "lines.seed={seed}", "store.dir={store}", "output.dir={out}"]
 
 
@@ -81,15 +87,18 @@ class Scene:
     def settings(self, method, lines, seed, tag, extra=()):
         out = os.path.join(self.work, tag)
         store = os.path.join(self.work, "store-" + tag)
-        keys = [k.format(method=method, lines=lines, seed=seed, store=store, out=out) for k in COMMON]
+        keys = [k.format(lines=lines, seed=seed, store=store, out=out) for k in COMMON] + METHODS[method]
         return keys + ["solver.threads=%d" % self.args.threads] + list(extra), out, store
+
+    def methods(self):
+        return ["classic", "hierarchical"] + (["pilot"] if self.spec.get("pilot") else [])
 
     def solve(self, method, lines, seed, tag, extra=()):
         """One run; returns its row of phase times and sizes."""
         keys, out, store = self.settings(method, lines, seed, tag, extra)
         row = {"scene": self.name, "method": method, "lines": lines, "seed": seed, "preprocess_s": 0.0,
                "preprocess_rss_mb": 0.0, "store_mb": 0.0}
-        if method == "hierarchical":
+        if method != "classic":
             shutil.rmtree(store, ignore_errors=True)
             run([os.path.join(BIN, "mpath-preprocess"), self.config, "-q"] + keys)
             pre = json.load(open(os.path.join(store, "preprocess.json")))
@@ -108,7 +117,7 @@ class Scene:
                    faces=rep["scene"]["faces"], polygons=rep["scene"]["polygons"],
                    energy_residual=rep["energy"]["relative_residual"], threads=rep["mpath"]["threads"],
                    escaped=rep["energy"]["escaped"] / rep["energy"]["emitted"])
-        if method == "hierarchical" and not self.args.keep_stores:  # the solution is what is measured
+        if method != "classic" and not self.args.keep_stores:  # the solution is what is measured
             shutil.rmtree(store, ignore_errors=True)
         return row, out
 
@@ -135,11 +144,13 @@ def evaluate_scene(scene, args):
         refs[tag] = scene.solve(method, scene.reference_lines, REFERENCE_SEED, "reference-" + tag, long_run + extra)
     rows = []
     for seed in scene.seeds:
-        for method in ("classic", "hierarchical"):
+        for method in scene.methods():
             for lines in (scene.classic_budgets if method == "classic" else scene.budgets):
                 tag = "%s-%d-%d" % (method, lines, seed)
                 row, out = scene.solve(method, lines, seed, tag)
-                for which, ref in (("classic_ref", refs["classic"][1]), ("own_ref", refs[method][1])):
+                # (a) for the pilot: the default hierarchical run's reference (same method, unbiased).
+                own = refs["classic" if method == "classic" else "hierarchical"][1]
+                for which, ref in (("classic_ref", refs["classic"][1]), ("own_ref", own)):
                     c, _ = scene.compare(out, ref, which)
                     row["mse_" + which] = c["mse"]
                     row["rel_rms_" + which] = c["rel_rms"]
@@ -258,23 +269,24 @@ def time_at_error(curve, e):
     return ("=", pts[-1][2])
 
 
-def speedups(rows, err_h, err_c):
-    """Per hierarchical rung: mean error and times, classic's time at that
-    error, speed-ups (solve alone, preprocess + solve) and their range over seeds."""
+def speedups(rows, err_h, err_c, method="hierarchical"):
+    """Per rung of `method` (hierarchical or pilot): mean error and times,
+    classic's time at that error, speed-ups (solve alone, preprocess + solve)
+    and their range over seeds."""
     out = []
     classic = mean_curve(rows, "classic", err_c, "solve_s")
-    for lines, e, solve in mean_curve(rows, "hierarchical", err_h, "solve_s"):
-        total = statistics.fmean(r["total_s"] for r in rows if r["method"] == "hierarchical" and r["lines"] == lines)
+    for lines, e, solve in mean_curve(rows, method, err_h, "solve_s"):
+        total = statistics.fmean(r["total_s"] for r in rows if r["method"] == method and r["lines"] == lines)
         ct = time_at_error(classic, e)
         per_seed = []
         for seed in sorted({r["seed"] for r in rows}):
             cs = [(r["lines"], r[err_c], r["solve_s"]) for r in rows if r["method"] == "classic" and r["seed"] == seed]
-            hs = [r for r in rows if r["method"] == "hierarchical" and r["seed"] == seed and r["lines"] == lines]
+            hs = [r for r in rows if r["method"] == method and r["seed"] == seed and r["lines"] == lines]
             if hs and cs:
                 t = time_at_error(cs, hs[0][err_h])
                 if t and t[0] == "=":
                     per_seed.append((t[1] / hs[0]["solve_s"], t[1] / hs[0]["total_s"]))
-        out.append({"lines": lines, "error": e, "solve_s": solve, "total_s": total,
+        out.append({"method": method, "lines": lines, "error": e, "solve_s": solve, "total_s": total,
                      "classic_bound": ct[0], "classic_s": ct[1], "speedup_solve": ct[1] / solve,
                      "speedup_total": ct[1] / total,
                      "seed_min_solve": min((p[0] for p in per_seed), default=float("nan")),
@@ -334,8 +346,12 @@ def plot_time_error(rows, title, path_stem):
         for method, key, style, colour, name in (
                 ("classic", "solve_s", "o-", "tab:orange", "classic"),
                 ("hierarchical", "solve_s", "s-", "tab:blue", "hierarchical, solve on a kept store"),
-                ("hierarchical", "total_s", "s--", "tab:purple", "hierarchical, preprocess + solve")):
+                ("hierarchical", "total_s", "s--", "tab:purple", "hierarchical, preprocess + solve"),
+                ("pilot", "solve_s", "^-", "tab:green", "pilot budget, solve on a kept store"),
+                ("pilot", "total_s", "^--", "tab:olive", "pilot budget, preprocess + solve")):
             sel = [r for r in rows if r["method"] == method]
+            if not sel:
+                continue
             ax.loglog([r[key] for r in sel], [r[err_key] for r in sel], style[0], alpha=0.3, color=colour, ms=4)
             curve = mean_curve(rows, method, err_key, key)
             ax.loglog([c[2] for c in curve], [c[1] for c in curve], style, color=colour, label=name)
@@ -438,7 +454,9 @@ def document(args, runs, speed, memory, bias, figures, meta):
       " scene's own in `configs/` (defaults otherwise: first shot, tolerance, adaptive lines). Times are wall"
       " seconds from `report.json` / `preprocess.json`: *solve* is the whole `mpath-solve` run (scene, mesh,"
       " store, first shot, iterations), which is what a rerun on a kept store costs; *first run* adds"
-      " `mpath-preprocess`." % ", ".join(str(s) for s in args.seeds))
+      " `mpath-preprocess`. On ROOM, BIG ROOM and OFFICE the hierarchical runs are made a second time with"
+      " `lines.box_budget = \"pilot\"` (an option: a pilot sets each box's lines and a lamp's small group gets a"
+      " box of its own; docs/algorithm.md), in a table of their own under each scene's." % ", ".join(str(s) for s in args.seeds))
     w("")
     w("Errors are of the radiosity over all patch faces, measured by `mpath-compare`: area-weighted MSE, and the"
       " relative RMS of the reflected radiosity B - E (emission is input and the same in every run; counting it would"
@@ -469,9 +487,10 @@ def document(args, runs, speed, memory, bias, figures, meta):
           " hier. rel. RMS (b) | hier. rel. RMS (a) | speed-up (b), solve | speed-up (b), first run |"
           " speed-up (a), solve |")
         w("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-        sp_b = {s["lines"]: s for s in speed if s["scene"] == name and s["reference"] == "classic"}
-        sp_a = {s["lines"]: s for s in speed if s["scene"] == name and s["reference"] == "own"}
-        for lines in sorted({r["lines"] for r in rs}):
+        hier = [s for s in speed if s["scene"] == name and s["method"] == "hierarchical"]
+        sp_b = {s["lines"]: s for s in hier if s["reference"] == "classic"}
+        sp_a = {s["lines"]: s for s in hier if s["reference"] == "own"}
+        for lines in sorted({r["lines"] for r in rs if r["method"] != "pilot"}):
             c = [r for r in rs if r["method"] == "classic" and r["lines"] == lines]
             h = [r for r in rs if r["method"] == "hierarchical" and r["lines"] == lines]
             m = lambda sel, k: statistics.fmean(r[k] for r in sel) if sel else float("nan")
@@ -486,25 +505,26 @@ def document(args, runs, speed, memory, bias, figures, meta):
         w("")
         w(equal_lines(rs))
         w("")
+        w(pilot_table(rs, speed, name))
         w("Other measures against the long classic run (b): the area-weighted MSE of the radiosity ((W/m2)^2, all"
           " faces, emitters included) and the median per-patch relative error (area-weighted; the relative RMS"
           " error above weighs bright faces most, the median weighs every square metre alike):")
         w("")
-        w("| lines | " + " | ".join("{:,}".format(l) for l in sorted({r["lines"] for r in rs})) + " |")
-        w("|---|" + "---:|" * len({r["lines"] for r in rs}))
+        ladder = sorted({r["lines"] for r in rs if r["method"] != "pilot"})
+        w("| lines | " + " | ".join("{:,}".format(l) for l in ladder) + " |")
+        w("|---|" + "---:|" * len(ladder))
         for key, label, form in (("mse_classic_ref", "MSE", "%.4g"), ("p50_classic_ref", "median patch error", "%.1f %%")):
             for method in ("classic", "hierarchical"):
                 cells = []
-                for lines in sorted({r["lines"] for r in rs}):
+                for lines in ladder:
                     sel = [r[key] for r in rs if r["method"] == method and r["lines"] == lines]
                     v = statistics.fmean(sel) * (100 if "%" in form else 1) if sel else None
                     cells.append(form % v if sel else "-")
                 w("| %s, %s | %s |" % (label, method, " | ".join(cells)))
-        sp_m = {s["lines"]: s for s in speed if s["scene"] == name and s["reference"] == "median"}
+        sp_m = {s["lines"]: s for s in hier if s["reference"] == "median"}
         for key, label in (("speedup_solve", "speed-up at equal median, solve"),
                            ("speedup_total", "speed-up at equal median, first run")):
-            w("| %s | %s |" % (label, " | ".join(fmt_speedup(sp_m[l], key) if l in sp_m else "-"
-                                                for l in sorted({r["lines"] for r in rs}))))
+            w("| %s | %s |" % (label, " | ".join(fmt_speedup(sp_m[l], key) if l in sp_m else "-" for l in ladder)))
         w("")
         if name in figures.get("time", {}):
             w("![%s: time against error](%s)" % (title, figures["time"][name]))
@@ -555,6 +575,29 @@ def document(args, runs, speed, memory, bias, figures, meta):
     w("")
     w(DISCUSSION)
     return "\n".join(L) + "\n"
+
+
+def pilot_table(rows, speed, name):
+    """The hierarchical method with the pilot budget (and bright subscenes),
+    rung by rung, beside the default's error."""
+    p = [r for r in rows if r["method"] == "pilot"]
+    if not p:
+        return ""
+    sp = {s["lines"]: s for s in speed if s["scene"] == name and s["method"] == "pilot" and s["reference"] == "classic"}
+    m = lambda sel, k: statistics.fmean(r[k] for r in sel)
+    out = ["With `lines.box_budget = \"pilot\"` (the same settings otherwise; its budget and bright subscenes,"
+           " docs/algorithm.md), against the long classic run (b):", "",
+           "| lines | pilot preprocess (s) | pilot solve (s) | pilot rel. RMS (b) | default rel. RMS (b) |"
+           " speed-up (b), solve | speed-up (b), first run |", "|---:|---:|---:|---:|---:|---:|---:|"]
+    for lines in sorted({r["lines"] for r in p}):
+        sel = [r for r in p if r["lines"] == lines]
+        h = [r for r in rows if r["method"] == "hierarchical" and r["lines"] == lines]
+        out.append("| %s | %.2f | %.2f | %.2f %% | %s | %s | %s |" % (
+            "{:,}".format(lines), m(sel, "preprocess_s"), m(sel, "solve_s"), 100 * m(sel, "rel_rms_classic_ref"),
+            "%.2f %%" % (100 * m(h, "rel_rms_classic_ref")) if h else "-",
+            fmt_speedup(sp[lines], "speedup_solve") if lines in sp else "-",
+            fmt_speedup(sp[lines], "speedup_total") if lines in sp else "-"))
+    return "\n".join(out) + "\n"
 
 
 def equal_lines(rows):
@@ -618,8 +661,9 @@ def verdicts(speed, scenes):
     out = []
     for scene in scenes:
         name = scene["name"]
-        sp = [s for s in speed if s["scene"] == name and s["reference"] == "classic"]
-        med = [s for s in speed if s["scene"] == name and s["reference"] == "median"]
+        sp = [s for s in speed if s["scene"] == name and s["reference"] == "classic" and s["method"] == "hierarchical"]
+        med = [s for s in speed if s["scene"] == name and s["reference"] == "median" and s["method"] == "hierarchical"]
+        pilot = [s for s in speed if s["scene"] == name and s["reference"] == "classic" and s["method"] == "pilot"]
         if not sp:
             continue
         inside = [s for s in sp if s["classic_bound"] == "="]
@@ -638,6 +682,12 @@ def verdicts(speed, scenes):
             solve, total = m(sp, "speedup_solve"), m(sp, "speedup_total")
             text += " **Target %.0fx** (relative RMS error): %s for the solve on a kept store, %s for a first run." % (
                 t, "met" if solve >= t else "not met", "met" if total >= t else "not met")
+        if pilot:
+            text += (" With `lines.box_budget = \"pilot\"`: %.2fx to %.2fx for the solve (median %.2fx), %.2fx to %.2fx"
+                     " for a first run (median %.2fx)." % (
+                         min(s["speedup_solve"] for s in pilot), max(s["speedup_solve"] for s in pilot),
+                         m(pilot, "speedup_solve"), min(s["speedup_total"] for s in pilot),
+                         max(s["speedup_total"] for s in pilot), m(pilot, "speedup_total")))
         out.append("- " + text)
     return "\n".join(out)
 
@@ -684,8 +734,9 @@ from this run's CSVs; what follows explains them, from the profiles in
   as much as stored-line Multipath at equal lines. Where a subscene is large
   (on OFFICE one box holds every desk with its keyboards, monitors and both
   table lamps), its lines are hardly denser than the root's. On OFFICE the
-  relative RMS error is dominated by the insides of the two table lamps'
-  shades, which lie in that desk box.
+  default's relative RMS error is dominated by the insides of the two table
+  lamps' shades, which lie in that desk box; the pilot budget gives each
+  lamp a box of its own and its lines (its table under the scene's).
 - **Bias.** The default line sets approximate nothing: their long run
   differs from the long classic run by what the two runs' own noise
   explains (the bias table per scene). The paper's transport
@@ -699,9 +750,11 @@ from this run's CSVs; what follows explains them, from the profiles in
   and a store is read once more when opened (the line sets' counts); the
   first run by the preprocessor's own work per line beyond Embree (line
   generation, sorting a chunk's lines for compression, encoding, zstd).
-  Closing the OFFICE target would take a hierarchy that keeps small bright
-  parts (a table lamp) as subscenes of their own, a line budget that follows
-  where the light is rather than box surface, and a cheaper preprocessor.
+  The pilot budget keeps small bright parts (a table lamp) as subscenes of
+  their own and spends lines where the light is rather than by box
+  surface; it is an option because it makes a store's boxes and lines
+  depend on the materials (docs/user-guide.md, "Design variants on one
+  store"). What is left for the first run is a cheaper preprocessor.
 """
 
 
@@ -771,8 +824,9 @@ def main():
         for reference, err_h, err_c in (("classic", "rel_rms_classic_ref", "rel_rms_classic_ref"),
                                         ("own", "rel_rms_own_ref", "rel_rms_classic_ref"),
                                         ("median", "p50_classic_ref", "p50_classic_ref")):
-            for s in speedups(rs, err_h, err_c):
-                speed.append(dict(scene=scene["name"], reference=reference, **s))
+            for method in ("hierarchical", "pilot"):
+                for s in speedups(rs, err_h, err_c, method):
+                    speed.append(dict(scene=scene["name"], reference=reference, **s))
     write_csv(os.path.join(bench, "results_speedup.csv"), speed)
     memory = []
     for scene in meta["scenes"]:
