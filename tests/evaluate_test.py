@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The evaluation driver, small: one scene (the shipped ROOM), two budgets, one
-seed, into a temporary folder. Checks that it writes its CSVs, figures and
+seed, three methods (classic, hierarchical, hierarchical with the pilot
+budget), into a temporary folder. Checks that it writes its CSVs, figures and
 results.md, that the document's numbers are the CSV's, and that the errors
 it measured behave as sampling says they must."""
 import csv
@@ -28,21 +29,24 @@ def main():
         if r.returncode != 0:
             sys.exit("the driver failed (exit %d)" % r.returncode)
         runs = list(csv.DictReader(open(os.path.join(docs, "benchmarks", "results_runs.csv"))))
-        check(len(runs) == 4, "two methods x two budgets give four runs (got %d)" % len(runs))
+        methods = sorted({row["method"] for row in runs})
+        check(methods == ["classic", "hierarchical", "pilot"], "ROOM runs classic, hierarchical and pilot (got %s)" % methods)
+        check(len(runs) == 6, "three methods x two budgets give six runs (got %d)" % len(runs))
         for row in runs:
             for key in ("solve_s", "rel_rms_classic_ref", "rel_rms_own_ref", "mse_classic_ref"):
                 v = float(row[key])
                 check(math.isfinite(v) and v > 0, "%s of %s %s is a positive number (%s)" % (key, row["method"], row["lines"], row[key]))
             check(abs(float(row["energy_residual"])) < 1e-9, "energy balances in %s %s" % (row["method"], row["lines"]))
-            if row["method"] == "hierarchical":
-                check(float(row["preprocess_s"]) > 0 and float(row["store_mb"]) > 0, "hierarchical runs record their preprocessing")
+            if row["method"] in ("hierarchical", "pilot"):
+                check(float(row["preprocess_s"]) > 0 and float(row["store_mb"]) > 0,
+                      "%s runs record their preprocessing" % row["method"])
             else:
                 check(row["rel_rms_classic_ref"] == row["rel_rms_own_ref"], "classic's own reference is the classic one")
         # Eight times the lines divide the Monte Carlo error by 2.8; the
         # reference's own noise (at 4x the larger budget) and classic's later
         # passes, which take at least the lines that cover the mesh at either
         # budget, keep it from falling that far: it must fall by a quarter.
-        for method in ("classic", "hierarchical"):
+        for method in ("classic", "hierarchical", "pilot"):
             e = {int(r["lines"]): float(r["rel_rms_own_ref"]) for r in runs if r["method"] == method}
             check(e[1200000] < 0.75 * e[150000], "%s error falls with lines (%s)" % (method, e))
         text = open(os.path.join(docs, "results.md")).read()
@@ -51,7 +55,13 @@ def main():
         check(cell in text, "results.md shows the CSV's classic row %r" % cell)
         check("## Memory (paper table 4)" in text and "| ROOM | 1,200,000 |" in text, "results.md has the memory table")
         speed = list(csv.DictReader(open(os.path.join(docs, "benchmarks", "results_speedup.csv"))))
-        check(len(speed) == 6, "a speed-up per hierarchical budget and measure (got %d)" % len(speed))
+        check(len(speed) == 12, "a speed-up per stored method, budget and measure (got %d)" % len(speed))
+        for method in ("hierarchical", "pilot"):
+            n = sum(1 for s in speed if s["method"] == method)
+            check(n == 6, "%s has a speed-up per budget and measure (got %d)" % (method, n))
+        pilot = [r for r in runs if r["method"] == "pilot" and r["lines"] == "1200000"][0]
+        check("| 1,200,000 | %.2f |" % float(pilot["preprocess_s"]) in text,
+              "results.md shows the CSV's pilot row at 1,200,000 lines")
         for stem in ("results_time_room", "results_error_room"):
             for ext in ("png", "svg"):
                 path = os.path.join(docs, "figures", "%s.%s" % (stem, ext))
