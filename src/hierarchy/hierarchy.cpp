@@ -614,30 +614,35 @@ class Builder {
     return true;
   }
 
+  // Polygons in the item (each group counted once; the answers are kept).
   size_t item_polygons(int item) const {
     if (items_[item].object >= 0) return object_polygons_[items_[item].object];
-    size_t n = 0;
-    for (int m : items_[item].members) n += item_polygons(m);
-    return n;
+    if (polygons_.size() < items_.size()) polygons_.resize(items_.size(), kUnknown);
+    if (polygons_[item] != kUnknown) return polygons_[item];
+    size_t sum = 0;
+    for (int m : items_[item].members) sum += item_polygons(m);
+    return polygons_[item] = sum;
   }
 
   // Does the item hold a patch that emits (the `emitting` flags given)?
+  // Each item is looked at once (the answers are kept).
   bool item_lit(int item) const {
-    if (emitting_.empty()) return false;
+    if (lit_.size() < items_.size()) lit_.resize(items_.size(), -1);
+    if (lit_[item] >= 0) return lit_[item] > 0;
+    bool lit = false;
     if (items_[item].object >= 0) {
-      for (uint32_t p : object_patches_[items_[item].object])
-        if (emitting_[p]) return true;
-      return false;
+      for (uint32_t p : object_patches_[items_[item].object]) lit = lit || emitting_[p];
+    } else {
+      for (int m : items_[item].members) lit = item_lit(m) || lit;
     }
-    for (int m : items_[item].members)
-      if (item_lit(m)) return true;
-    return false;
+    lit_[item] = lit;
+    return lit;
   }
 
   // A group that may be a bright subscene: it holds an emitter and enough
-  // polygons to pay for a box.
+  // polygons to pay for a box. Never without the emitters.
   bool bright_candidate(int item) const {
-    return items_[item].object < 0 && item_polygons(item) >= kMinPolygons && item_lit(item);
+    return !emitting_.empty() && items_[item].object < 0 && item_lit(item) && item_polygons(item) >= kMinPolygons;
   }
 
   // Puts `items` into box `box` (of surface area `area`): objects directly,
@@ -739,6 +744,9 @@ class Builder {
   const PatchMesh& mesh_;
   HierarchyOptions options_;
   const std::vector<uint8_t>& emitting_;  // per patch; empty: no bright subscenes
+  mutable std::vector<int8_t> lit_;       // per item: item_lit's answer (-1: not yet known)
+  static constexpr size_t kUnknown = ~size_t{0};
+  mutable std::vector<size_t> polygons_;  // per group: item_polygons's answer (kUnknown: not yet known)
   std::vector<std::vector<uint32_t>> object_patches_;
   std::vector<size_t> object_polygons_;
   std::vector<Bounds> object_bounds_;
