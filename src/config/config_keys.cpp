@@ -404,13 +404,15 @@ std::vector<ConfigKey> make_table() {
       {"lines.root_fraction", "share of lines in the root box (hierarchical method, `lines.box_budget` `\"quotient\"` or `\"objects\"`)",
        SET(o.lines.root_fraction = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.lines.root_fraction)},
       {"lines.box_budget",
-       "how the boxes share the lines: `lines.root_fraction` in the root and the rest by grouping `\"quotient\"` or "
-       "by `\"objects\"`, or `\"pilot\"` (a cheap pilot of `lines.pilot` local and global lines estimates where the "
-       "error lies and sets the root's share, at least 2/3, and the subscenes', and a lamp's small group below "
-       "`hierarchy.max_depth` is a subscene of its own; less error at equal lines, but the store's lines and boxes "
-       "then depend on the materials; see algorithm.md)",
+       "how the boxes share the lines: `\"pilot\"` (a cheap pilot of `lines.pilot` local and global lines estimates "
+       "where the error lies and sets the root's share, at least 2/3, and the subscenes', and a lamp's small group "
+       "below `hierarchy.max_depth` is a subscene of its own; less error at equal lines, but the store's lines and "
+       "boxes then depend on the materials; see algorithm.md), or the paper's rule: `lines.root_fraction` in the "
+       "root and the rest by grouping `\"quotient\"` or by `\"objects\"`",
        SET(o.lines.box_budget = get_choice(n, s, "budget", {"quotient", "objects", "pilot"})), GET(o.lines.box_budget)},
-      {"lines.pilot", "local lines from the emitters and global lines of the pilot of `lines.box_budget = \"pilot\"`",
+      {"lines.pilot",
+       "local lines from the emitters and global lines of the pilot of `lines.box_budget = \"pilot\"` (at most a "
+       "quarter of `lines.total`)",
        SET(o.lines.pilot = positive_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.lines.pilot))},
       {"lines.min_density",
        "no subscene gets fewer lines per unit of box surface than this times the root's (all boxes scaled down alike "
