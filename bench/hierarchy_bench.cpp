@@ -1,7 +1,9 @@
 // Benchmark: the hierarchy build (grouping) of a scene, wall and CPU seconds,
 // with the spatial grid mpath uses and, when asked, by comparing every pair
-// (the quadratic reference), checking that both give the same boxes. Writes
-// one JSON record.
+// (the quadratic reference), checking that both give the same boxes. The
+// emitters are marked as mpath-preprocess marks them (with the default pilot
+// budget: bright subscenes), and the build is timed once more without them.
+// Writes one JSON record.
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
@@ -14,6 +16,7 @@
 #include "hierarchy.h"
 #include "mpath_version.h"
 #include "prepared_scene.h"
+#include "store_identity.h"
 
 namespace {
 
@@ -24,11 +27,12 @@ struct Timed {
   double wall = 0, cpu = 0;
 };
 
-Timed timed_build(const PatchMesh& mesh, const HierarchyOptions& options, bool all_pairs) {
+Timed timed_build(const PatchMesh& mesh, const HierarchyOptions& options, bool all_pairs,
+                  const std::vector<uint8_t>& emitting) {
   const auto w0 = std::chrono::steady_clock::now();
   const std::clock_t c0 = std::clock();  // the process's CPU time, every thread
   Timed t;
-  t.h = build_hierarchy(mesh, options, false, all_pairs);
+  t.h = build_hierarchy(mesh, options, false, all_pairs, emitting);
   t.cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
   t.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
   return t;
@@ -49,7 +53,9 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::warn);
   const Options options = load_options(config, overrides);
   const PreparedScene prepared = prepare_scene(options);
-  const Timed grid = timed_build(prepared.mesh, options.hierarchy, false);
+  const std::vector<uint8_t> emitting = grouping_emitters(options, prepared.mesh, prepared.scene);
+  const Timed grid = timed_build(prepared.mesh, options.hierarchy, false, emitting);
+  const Timed unlit = timed_build(prepared.mesh, options.hierarchy, false, {});
   nlohmann::json j = {{"mpath", std::string(MPATH_VERSION) + " (" + MPATH_GIT_COMMIT + ")"},
                       {"scene", options.scene.file.string()},
                       {"polygons", prepared.scene.polygons.size()},
@@ -57,9 +63,13 @@ int main(int argc, char** argv) {
                       {"patches", prepared.mesh.patches.size()},
                       {"boxes", grid.h.boxes.size()},
                       {"grid_wall_s", grid.wall},
-                      {"grid_cpu_s", grid.cpu}};
+                      {"grid_cpu_s", grid.cpu},
+                      {"emitters_marked", !emitting.empty()},
+                      {"unmarked_boxes", unlit.h.boxes.size()},
+                      {"unmarked_wall_s", unlit.wall},
+                      {"unmarked_cpu_s", unlit.cpu}};
   if (all_pairs) {
-    const Timed all = timed_build(prepared.mesh, options.hierarchy, true);
+    const Timed all = timed_build(prepared.mesh, options.hierarchy, true, emitting);
     j["all_pairs_wall_s"] = all.wall;
     j["all_pairs_cpu_s"] = all.cpu;
     j["same"] = describe_hierarchy(all.h, {}) == describe_hierarchy(grid.h, {}) && all.h.patch_box == grid.h.patch_box;

@@ -50,13 +50,18 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
   };
 }
 
+std::vector<uint8_t> grouping_emitters(const Options& options, const PatchMesh& mesh, const Scene& scene) {
+  std::vector<uint8_t> emitting;
+  if (options.lines.box_budget == "pilot" && options.hierarchy.transport == "lines") {
+    emitting.resize(mesh.patches.size(), 0);
+    for (size_t p = 0; p < mesh.patches.size(); ++p) emitting[p] = scene.materials[mesh.patches[p].material].emits();
+  }
+  return emitting;
+}
+
 Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh, const std::vector<BoxLayout>* layout,
                           const Scene* scene) {
-  std::vector<uint8_t> emitting;
-  if (scene && options.lines.box_budget == "pilot" && options.hierarchy.transport == "lines") {
-    emitting.resize(mesh.patches.size(), 0);
-    for (size_t p = 0; p < mesh.patches.size(); ++p) emitting[p] = scene->materials[mesh.patches[p].material].emits();
-  }
+  const std::vector<uint8_t> emitting = scene ? grouping_emitters(options, mesh, *scene) : std::vector<uint8_t>{};
   Hierarchy h = layout ? assemble_hierarchy(mesh, options.hierarchy, *layout)
                        : build_hierarchy(mesh, options.hierarchy, options.solver.method != SolverMethod::hierarchical,
                                          false, emitting);

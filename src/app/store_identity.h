@@ -27,4 +27,8 @@ std::string mesh_hash(const PatchMesh& mesh);
 Hierarchy store_hierarchy(const Options& options, const PatchMesh& mesh, const std::vector<BoxLayout>* layout = nullptr,
                           const Scene* scene = nullptr);
 
+// The per-patch emitter flags store_hierarchy gives the grouping: empty
+// unless lines.box_budget = "pilot" and the line sets (bright subscenes).
+std::vector<uint8_t> grouping_emitters(const Options& options, const PatchMesh& mesh, const Scene& scene);
+
 }  // namespace mpath
