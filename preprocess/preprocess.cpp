@@ -223,10 +223,9 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   std::vector<double> pilot;
   if (options.lines.box_budget == "pilot" && hierarchy.boxes.size() > 1) {
     t = clock::now();
-    pilot = pilot_weights(prepared.scene, mesh, hierarchy, options.lines.seed,
-                          static_cast<uint64_t>(options.lines.pilot_lines()));
-    spdlog::info("pilot: {} local and {} global lines ({:.2f} s){}", options.lines.pilot_lines(), options.lines.pilot_lines(),
-                 seconds(clock::now() - t),
+    const long long lines = options.lines.pilot_lines();
+    pilot = pilot_weights(prepared.scene, mesh, hierarchy, options.lines.seed, static_cast<uint64_t>(lines));
+    spdlog::info("pilot: {} local and {} global lines ({:.2f} s){}", lines, lines, seconds(clock::now() - t),
                  pilot.empty() ? ": nothing emits, the subscenes share by quotient" : "");
   }
   const std::vector<uint64_t> budget = box_line_budget(hierarchy, options.lines, pilot);

@@ -3,8 +3,8 @@
 n x n (n offices side by side, each with its walls, furniture and lamps; 36
 tiles are 1.1M polygons and 173k objects), wall and CPU seconds of the
 grouping (bench/hierarchy_bench; as mpath-preprocess builds it by default,
-the emitters marked for bright subscenes, and again without them), with the all-pairs reference build timed
-and compared on the small tilings. Writes docs/benchmarks/hierarchy.csv and
+the emitters marked for bright subscenes, and again without them), with the
+all-pairs reference build timed and compared on the small tilings. Writes docs/benchmarks/hierarchy.csv and
 docs/figures/hierarchy.png.
 
 usage: bench_hierarchy.py WORK [--tiles 1,2,3,4,6] [--all-pairs-up-to 2]

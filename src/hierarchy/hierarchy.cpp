@@ -627,11 +627,13 @@ class Builder {
   // Does the item hold a patch that emits (the `emitting` flags given)?
   // Each item is looked at once (the answers are kept).
   bool item_lit(int item) const {
+    if (emitting_.empty()) return false;
     if (lit_.size() < items_.size()) lit_.resize(items_.size(), -1);
     if (lit_[item] >= 0) return lit_[item] > 0;
     bool lit = false;
     if (items_[item].object >= 0) {
-      for (uint32_t p : object_patches_[items_[item].object]) lit = lit || emitting_[p];
+      const auto& patches = object_patches_[items_[item].object];
+      lit = std::any_of(patches.begin(), patches.end(), [&](uint32_t p) { return emitting_[p] != 0; });
     } else {
       for (int m : items_[item].members) lit = item_lit(m) || lit;
     }
@@ -640,9 +642,10 @@ class Builder {
   }
 
   // A group that may be a bright subscene: it holds an emitter and enough
-  // polygons to pay for a box. Never without the emitters.
+  // polygons to pay for a box (never without the emitters: item_lit says no
+  // at once, before any polygons are counted).
   bool bright_candidate(int item) const {
-    return !emitting_.empty() && items_[item].object < 0 && item_lit(item) && item_polygons(item) >= kMinPolygons;
+    return items_[item].object < 0 && item_lit(item) && item_polygons(item) >= kMinPolygons;
   }
 
   // Puts `items` into box `box` (of surface area `area`): objects directly,
