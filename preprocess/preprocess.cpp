@@ -225,7 +225,8 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
     t = clock::now();
     const long long lines = options.lines.pilot_lines();
     pilot = pilot_weights(prepared.scene, mesh, hierarchy, options.lines.seed, static_cast<uint64_t>(lines));
-    spdlog::info("pilot: {} local and {} global lines ({:.2f} s){}", lines, lines, seconds(clock::now() - t),
+    stats.pilot_seconds = seconds(clock::now() - t);
+    spdlog::info("pilot: {} local and {} global lines ({:.2f} s){}", lines, lines, stats.pilot_seconds,
                  pilot.empty() ? ": nothing emits, the subscenes share by quotient" : "");
   }
   const std::vector<uint64_t> budget = box_line_budget(hierarchy, options.lines, pilot);
@@ -280,7 +281,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   stats.wall_seconds = seconds(clock::now() - start);
   const nlohmann::json timings = {{"shard", fmt::format("{}/{}", shard.index, shard.count)}, {"lines", stats.lines},
                                  {"events", stats.events}, {"bytes", stats.bytes}, {"raw_bytes", stats.raw_bytes},
-                                 {"hierarchy_seconds", stats.hierarchy_seconds},
+                                 {"hierarchy_seconds", stats.hierarchy_seconds}, {"pilot_seconds", stats.pilot_seconds},
                                  {"trace_seconds", stats.trace_seconds}, {"encode_seconds", stats.encode_seconds},
                                  {"compress_seconds", stats.compress_seconds}, {"write_seconds", stats.write_seconds},
                                  {"wall_seconds", stats.wall_seconds}, {"threads", threads},

@@ -9,6 +9,7 @@
 #include <random>
 
 #include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
 
 #include "box_store.h"
 #include "error.h"
@@ -142,7 +143,7 @@ std::vector<double> expect_pilot_optimum(const Hierarchy& h, const std::vector<d
 }
 
 // The furnished room with a lamp over table A: the pilot sees its light on
-// every box, gives the same weights on every call, and the budget it sets is
+// every box, gives the same weights on every call and on any number of threads, and the budget it sets is
 // its model's optimum (expect_pilot_optimum; the budget finds the root share
 // by a scan of 0.17 % steps, the rest in closed form). A table under the
 // lamp gets more lines than the same table in the dark.
@@ -158,6 +159,10 @@ TEST(PilotBudget, SpendsTheLinesWhereItsModelSaysTheErrorIs) {
   const std::vector<double> w = pilot_weights(scene, mesh, h, 1, 100'000);
   ASSERT_EQ(w.size(), 3u);
   EXPECT_EQ(pilot_weights(scene, mesh, h, 1, 100'000), w);
+  {  // The pilot runs its blocks of lines on the threads there are; one thread gives the same bits.
+    const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    EXPECT_EQ(pilot_weights(scene, mesh, h, 1, 100'000), w);
+  }
   for (const double x : w) EXPECT_GT(x, 0);
   // The table under the lamp (x 1..1.8) against the one at x 4.2.
   const int under = h.boxes[1].bounds.lo.x < 2 ? 1 : 2, far = 3 - under;
