@@ -14,7 +14,8 @@ using Rng = pcg32;
 // Independent stream for (seed, purpose, shard): same inputs, same numbers.
 Rng make_rng(unsigned long long seed, unsigned purpose, unsigned long long shard);
 
-inline double uniform(Rng& rng) { return std::ldexp(static_cast<double>(rng()), -32); }
+// rng() * 2^-32: exact, as std::ldexp(rng(), -32) was, without its call.
+inline double uniform(Rng& rng) { return static_cast<double>(rng()) * 0x1p-32; }
 
 // Cosine-distributed direction about unit normal n.
 Vec3 cosine_direction(const Vec3& n, Rng& rng);
