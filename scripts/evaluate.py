@@ -59,7 +59,7 @@ TARGETS = {"room": (1.5, 5.0), "bigroom": (2.5, 5.0), "office": (2.5, 5.0), "off
 METHODS = {"classic": ["solver.method=classic"], "hierarchical": ["solver.method=hierarchical"],
            "quotient": ["solver.method=hierarchical", "lines.box_budget=quotient"]}
 REFERENCE_SEED = 977
-COMMON = ["output.png=false", "output.exr=false", "lines.total={lines}",
+COMMON = ["output.png=false", "output.exr=false", "output.grids=false", "lines.total={lines}",
           "lines.seed={seed}", "store.dir={store}", "output.dir={out}"]
 
 
@@ -456,7 +456,9 @@ def document(args, runs, speed, memory, bias, figures, meta):
       " \"hierarchical\"` (locally global lines per subscene, stored on disk and streamed). The config is the"
       " scene's own in `configs/` (defaults otherwise: first shot, tolerance, adaptive lines). Times are wall"
       " seconds from `report.json` / `preprocess.json`: *solve* is the whole `mpath-solve` run (scene, mesh,"
-      " store, first shot, iterations), which is what a rerun on a kept store costs; *first run* adds"
+      " store, first shot, iterations and solution.ply; camera images and illuminance grids are off in every run,"
+      " since they cost the same whatever the method and the lines), which is what a rerun on a kept store costs;"
+      " *first run* adds"
       " `mpath-preprocess`. The hierarchical runs use the default budget, `lines.box_budget = \"pilot\"` (a pilot"
       " sets each box's lines and a lamp's small group gets a box of its own; docs/algorithm.md); on ROOM, BIG ROOM"
       " and OFFICE they are made a second time with the paper's budget, `lines.box_budget = \"quotient\"`, in a"

@@ -207,6 +207,15 @@ TEST(Photometry, RunWritesTheGridsFilesAndFigures) {
     EXPECT_NEAR(m["radiosity_W_m2"][c].get<double>(), 2.0, 2.0 * 2e-4);
   }
   EXPECT_NEAR(m["luminance_cd_m2"].get<double>(), 179 * 2.0 / std::numbers::pi, 179 * 2.0 / std::numbers::pi * 2e-4);
+
+  // output.grids = false: the same run without the grids' files and figures.
+  const test::RunResult off = test::run(test::solve_bin() + " " + (dir / "run.toml").string() +
+                                        " -q output.grids=false output.dir=\"" + (dir / "off").string() + "\"");
+  ASSERT_EQ(off.exit_code, 0) << off.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "off/desk.csv"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "off/desk.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "off/solution.ply"));
+  EXPECT_EQ(nlohmann::json::parse(test::read_file(dir / "off/report.json"))["grids"].size(), 0u);
 }
 
 TEST(Photometry, GridConfigIsChecked) {

@@ -103,6 +103,7 @@ struct Options {
     std::filesystem::path dir = "results";
     bool exr = true;  // an EXR per camera
     bool png = true;  // and a tone-mapped PNG preview beside it
+    bool grids = true;  // the [[grid]] illuminance measurements
   } output;
 
   std::vector<CameraOptions> cameras;

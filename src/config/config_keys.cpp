@@ -467,6 +467,8 @@ std::vector<ConfigKey> make_table() {
        GET(o.output.dir.string())},
       {"output.exr", "an EXR image per camera", SET(o.output.exr = get_bool(n, s)), GET(o.output.exr)},
       {"output.png", "a tone-mapped PNG preview beside each EXR", SET(o.output.png = get_bool(n, s)), GET(o.output.png)},
+      {"output.grids", "measure and write the `[[grid]]` illuminance grids (false: skip them on this run)",
+       SET(o.output.grids = get_bool(n, s)), GET(o.output.grids)},
       table_array_key<CameraOptions>(
           "camera",
           "`name`, `position`, `look_at`, `up` (`[0,1,0]`), `fov_deg` (vertical, 40), `width`, `height` (512), "
