@@ -28,6 +28,10 @@ struct BoxTally {
 
 // A chunk's lines as traced, and their stored order: line k of the file is
 // line order[k] of `lines`.
+// Line indices in order of `key`, ties in index order (the order sorting
+// (key, index) pairs gives).
+void order_by_key(const std::vector<uint64_t>& key, std::vector<uint32_t>& order);
+
 struct TracedChunk {
   linestore::DecodedChunk lines;
   std::vector<uint32_t> order;

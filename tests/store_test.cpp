@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <nlohmann/json.hpp>
+#include <algorithm>
 #include <random>
 
 #include "line_tracing.h"
@@ -32,6 +33,29 @@ RunResult preprocess(const std::string& args) {
 }
 RunResult solve(const std::string& args) {
   return test::run(test::solve_bin() + " " + kCornell + kSmall + " solver.method=multipath output.png=false" + quiet(args));
+}
+
+// A chunk's lines are stored in order of (first crossing, last crossing),
+// ties in line order: the radix sort gives what sorting (key, line) pairs
+// gives, on keys of few distinct values (many ties), of the stored form
+// (patch ids up to 2^24 in both halves, 0 for an empty line), and of any 64 bits.
+TEST(Store, LinesAreOrderedAsSortingKeyAndLinePairsOrdersThem) {
+  std::mt19937_64 rng(7);
+  for (int trial = 0; trial < 60; ++trial) {
+    const size_t n = std::uniform_int_distribution<size_t>(0, 70'000)(rng) >> (trial % 4 * 4);
+    std::vector<uint64_t> key(n);
+    for (uint64_t& k : key) {
+      const uint64_t first = rng() % (trial % 3 == 0 ? 5 : 1u << 24), last = rng() % (1u << 24);
+      k = trial % 3 == 2 ? rng() : (rng() % 8 == 0 ? 0 : ((first + 1) << 32) | last);
+    }
+    std::vector<std::pair<uint64_t, uint32_t>> pairs(n);
+    for (size_t i = 0; i < n; ++i) pairs[i] = {key[i], static_cast<uint32_t>(i)};
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<uint32_t> order;
+    order_by_key(key, order);
+    ASSERT_EQ(order.size(), n);
+    for (size_t i = 0; i < n; ++i) ASSERT_EQ(order[i], pairs[i].second) << "trial " << trial << ", place " << i;
+  }
 }
 
 TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
