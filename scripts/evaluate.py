@@ -766,6 +766,23 @@ from this run's CSVs; what follows explains them, from the profiles in
   materials (`lines.box_budget = "quotient"` where design variants on a
   kept store must match fresh stores bit for bit; docs/user-guide.md).
   What is left for the first run is a cheaper preprocessor.
+- **Where a target is not met** (first runs on BIG ROOM and office2, the
+  kept-store solve on BIG ROOM and office2). A first run spends about
+  two thirds of its time preprocessing (the table above), whose profile
+  (BIG ROOM, docs/performance.md) is Embree's tracing 40 %, zstd 12 %,
+  line generation 8 %, encoding 6 %, the class counts 4.5 %: per line
+  about what a classic pass costs, so a first run's speed-up at equal
+  error is roughly one over the square of the error ratio at equal lines,
+  less what a first run costs beyond a classic solve of the same lines.
+  That ratio is 0.58-0.65 on OFFICE, 0.66-0.77 on ROOM and BIG ROOM, and
+  1.01-1.10 on office2, where the pilot gives the root every line (its ceiling strips
+  light the whole room; no subscene holds more of the error than its
+  lines would buy: "pilot budget: 100.0 % of the lines in the root") and
+  the store is a stored Multipath store; BIG ROOM's pilot keeps 89 % in
+  the root. A kept-store solve is bound by its first shot: local lines
+  from the emitters traced with Embree, 41-45 % of the hierarchical
+  solve on ROOM, BIG ROOM and office2 (22 % on OFFICE), the same cost as
+  classic's first shot.
 """
 
 
