@@ -20,9 +20,11 @@ constexpr unsigned kPilotStream = 12;
 // weights are the same, bit for bit, on any number of threads.
 constexpr uint64_t kPilotBlock = 4096;
 
-// Runs blocks [0, blocks) of `work` on the threads there are; work(block,
-// rng, out) appends (face, value) pairs to `out`; adds them, in block order,
-// to `into` through add(into, pair).
+// Runs `lines` lines in blocks of kPilotBlock on the threads there are:
+// work(n, rng, out) runs n lines with the block's own stream and appends
+// what they find to `out`; then add(pair) takes every block's pairs, in
+// block order. The lists hold a pair per crossing of the pilot's lines
+// (about 10 MB for 200,000 lines on OFFICE).
 template <typename Pair, typename Work, typename Add>
 void in_blocks(uint64_t lines, unsigned long long seed, unsigned long long first_stream, const Work& work,
                const Add& add) {
