@@ -20,6 +20,8 @@ constexpr unsigned kPilotStream = 12;
 // weights are the same, bit for bit, on any number of threads.
 constexpr uint64_t kPilotBlock = 4096;
 
+uint64_t block_count(uint64_t lines) { return (lines + kPilotBlock - 1) / kPilotBlock; }
+
 // Runs `lines` lines in blocks of kPilotBlock on the threads there are:
 // work(n, rng, out) runs n lines with the block's own stream and appends
 // what they find to `out`; then add(pair) takes every block's pairs, in
@@ -28,7 +30,7 @@ constexpr uint64_t kPilotBlock = 4096;
 template <typename Pair, typename Work, typename Add>
 void in_blocks(uint64_t lines, unsigned long long seed, unsigned long long first_stream, const Work& work,
                const Add& add) {
-  const uint64_t blocks = (lines + kPilotBlock - 1) / kPilotBlock;
+  const uint64_t blocks = block_count(lines);
   std::vector<std::vector<Pair>> found(blocks);
   tbb::parallel_for(uint64_t{0}, blocks, [&](uint64_t b) {
     Rng rng = make_rng(seed, kPilotStream, first_stream + b);
@@ -61,7 +63,7 @@ std::vector<double> pilot_weights(const Scene& scene, const PatchMesh& mesh, con
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   const double share = total / static_cast<double>(lines);
   // Streams: the local lines' blocks first, then the global lines'.
-  const unsigned long long global_streams = (lines + kPilotBlock - 1) / kPilotBlock;
+  const unsigned long long global_streams = block_count(lines);
   std::vector<double> reflected(faces, 0.0);  // W
   in_blocks<std::pair<int, double>>(
       lines, seed, 0,

@@ -178,7 +178,8 @@ void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& 
       }
     }
   }
-  for (const GridOptions& grid : options.output.grids ? options.grids : std::vector<GridOptions>{}) {
+  const std::vector<GridOptions> none;  // output.grids = false
+  for (const GridOptions& grid : options.output.grids ? options.grids : none) {
     const GridResult result = measure_grid(grid, mesh, tracer, state, lights, options.lines.seed);
     write_grid_csv(options.output.dir / (grid.name + ".csv"), result);
     write_grid_png(options.output.dir / (grid.name + ".png"), result);
