@@ -27,6 +27,7 @@
 #include "process_memory.h"
 #include "progress.h"
 #include "store_identity.h"
+#include "stored_shot.h"
 
 namespace mpath {
 
@@ -206,6 +207,16 @@ linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, co
           hi - lo, bytes, hash_file(path)};
 }
 
+// Once the store is complete, the first shot a solve of it would trace
+// (stored_shot.h); not with first_shot.accelerate, whose solves trace it.
+void add_first_shot(const Options& options, const PreparedScene& prepared, PreprocessStats& stats) {
+  if (options.first_shot.accelerate) return;
+  const StoredShotStats shot = store_first_shot(options, prepared);
+  stats.first_shot_lines = shot.lines;
+  stats.first_shot_bytes = shot.bytes;
+  stats.first_shot_seconds = shot.seconds;
+}
+
 }  // namespace
 
 PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, bool dry_run, bool print_hierarchy) {
@@ -261,6 +272,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
     spdlog::info("{}: shard {}/{} finished and verified earlier, not traced again", dir.string(), shard.index, shard.count);
     stats.skipped = true;
     if (shard.count > 1) stats.manifest_written = merge_parts(dir, shard, base);
+    if (shard.count == 1 || stats.manifest_written) add_first_shot(options, prepared, stats);
     return stats;
   }
   // The store is incomplete from now until this run's manifest is written.
@@ -278,10 +290,14 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   }
   linestore::write_manifest(record, m);
   stats.manifest_written = shard.count == 1 || merge_parts(dir, shard, base);
+  if (stats.manifest_written) add_first_shot(options, prepared, stats);
   stats.wall_seconds = seconds(clock::now() - start);
   const nlohmann::json timings = {{"shard", fmt::format("{}/{}", shard.index, shard.count)}, {"lines", stats.lines},
                                  {"events", stats.events}, {"bytes", stats.bytes}, {"raw_bytes", stats.raw_bytes},
                                  {"hierarchy_seconds", stats.hierarchy_seconds}, {"pilot_seconds", stats.pilot_seconds},
+                                 {"first_shot_seconds", stats.first_shot_seconds},
+                                 {"first_shot_lines", stats.first_shot_lines},
+                                 {"first_shot_bytes", stats.first_shot_bytes},
                                  {"trace_seconds", stats.trace_seconds}, {"encode_seconds", stats.encode_seconds},
                                  {"compress_seconds", stats.compress_seconds}, {"write_seconds", stats.write_seconds},
                                  {"wall_seconds", stats.wall_seconds}, {"threads", threads},

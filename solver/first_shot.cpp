@@ -5,6 +5,9 @@
 #include <cmath>
 
 #include "accelerated_shot.h"
+#include "box_store.h"
+#include "classic.h"
+#include "ranks.h"
 #include "progress.h"
 #include "sampling.h"
 #include "transport.h"
@@ -49,11 +52,11 @@ std::vector<double> emitter_crossings(const Options& options, std::vector<double
   return crossings;
 }
 
-FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long budget,
-                          unsigned long long seed, int shards, const std::vector<double>& global_crossings,
-                          const SubsceneNearest* accelerated) {
-  const auto start = std::chrono::steady_clock::now();
-  FirstShotStats stats;
+Rng first_shot_rng(unsigned long long seed, uint64_t block) { return make_rng(seed, kFirstShotStream, block); }
+
+FirstShotPlan plan_first_shot(const PatchMesh& mesh, const RadiosityState& state, long long budget,
+                              const std::vector<double>& global_crossings) {
+  FirstShotPlan plan;
   std::vector<int> emitters;
   for (size_t f = 0; f < state.faces; ++f)
     if (face_power(state, static_cast<int>(f)) > 0) emitters.push_back(static_cast<int>(f));
@@ -65,54 +68,88 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
       // A face that may touch another shoots locally: what it emits where
       // it touches stays there (receive_in_contact), which a global line
       // cannot tell apart.
-      if (!mesh.may_touch(mesh.face_patch[f]) && global_crossings[f] >= static_cast<double>(counts[e])) {
-        for (int c = 0; c < state.channels; ++c) state.unshot[state.at(f, c)] += state.emitted_power[state.at(f, c)];
-        ++stats.global_emitter_faces;
-      } else {
+      if (!mesh.may_touch(mesh.face_patch[f]) && global_crossings[f] >= static_cast<double>(counts[e]))
+        plan.global_faces.push_back(f);
+      else
         local.push_back(f);
-      }
     }
     if (local.size() != emitters.size()) {
       emitters = std::move(local);
       counts = allocate_lines(state, budget, emitters);
     }
   }
-  std::vector<uint64_t> first(counts.size() + 1, 0);  // first line of each emitter
-  for (size_t i = 0; i < counts.size(); ++i) first[i + 1] = first[i] + counts[i];
-  const uint64_t total = first.back();
+  plan.emitters = std::move(emitters);
+  for (uint64_t n : counts) plan.first.push_back(plan.first.back() + n);
+  return plan;
+}
 
-  const int ch = state.channels;
+RunFirstShot plan_run_first_shot(const Options& options, const PatchMesh& mesh, const RadiosityState& state,
+                                 const BoxStore* store, const std::vector<PointLight>& lights) {
+  std::vector<double> crossings = store ? store->face_crossings(mesh.face_count())
+                                        : forecast_crossings(mesh, static_cast<double>(options.lines.total));
+  // first_shot.lines shared by power between the emitting faces and the lights.
+  const double faces_power = state.emitted_total();
+  double lights_power = 0;
+  for (const PointLight& l : lights) lights_power += l.power() * state.channels;
+  const double total_power = faces_power + lights_power;
+  const auto share = [&](double power) {  // nothing emits at all (lights at multiplier 0): no lines
+    return total_power > 0
+               ? static_cast<long long>(std::llround(static_cast<double>(first_shot_lines(options)) * power / total_power))
+               : 0LL;
+  };
+  RunFirstShot run;
+  run.plan = plan_first_shot(mesh, state, lights.empty() ? first_shot_lines(options) : share(faces_power),
+                             emitter_crossings(options, std::move(crossings)));
+  for (const PointLight& l : lights) run.light_lines.push_back(std::max<long long>(10'000, share(l.power() * state.channels)));
+  return run;
+}
+
+void receive_emitter_lines(const RadiosityState& state, const FirstShotPlan& plan, size_t e, uint32_t code, uint64_t lines,
+                           ShardAccumulator& acc) {
+  const int face = plan.emitters[e];
+  const double share = static_cast<double>(lines) / static_cast<double>(plan.count(e));
+  double power[3];
+  for (int c = 0; c < state.channels; ++c) power[c] = state.emitted_power[state.at(face, c)] * share;
+  receive_outcome(state, face, code, power, acc);
+}
+
+void leave_to_global_lines(const FirstShotPlan& plan, RadiosityState& state) {
+  for (int f : plan.global_faces)
+    for (int c = 0; c < state.channels; ++c) state.unshot[state.at(f, c)] += state.emitted_power[state.at(f, c)];
+}
+
+FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const FirstShotPlan& plan,
+                          unsigned long long seed, int shards, const SubsceneNearest* accelerated) {
+  const auto start = std::chrono::steady_clock::now();
+  FirstShotStats stats;
+  leave_to_global_lines(plan, state);
+  const uint64_t total = plan.lines();
+  const uint64_t blocks = (total + kFirstShotBlock - 1) / kFirstShotBlock;
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
+  const auto nearest = [&](int from, const Vec3& org, const Vec3& dir) {
+    return accelerated ? accelerated->nearest_from(from, org, dir) : tracer.nearest_from(from, org, dir, tfar);
+  };
   std::vector<ShardAccumulator> acc(shards);
   Progress progress("first shot", total, "lines", true);
   run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
     ShardAccumulator& a = acc[s];
-    Rng rng = make_rng(seed, kFirstShotStream, static_cast<unsigned long long>(s));
-    const uint64_t lo = total * s / shards, hi = total * (s + 1) / shards;
-    size_t e = std::upper_bound(first.begin(), first.end(), lo) - first.begin() - 1;
-    uint64_t since_report = 0;
-    for (uint64_t line = lo; line < hi; ++line) {
-      while (line >= first[e + 1]) ++e;
-      const int face = emitters[e];
-      double power[3];
-      for (int c = 0; c < ch; ++c) power[c] = state.emitted_power[state.at(face, c)] / static_cast<double>(counts[e]);
-      shoot_local_line(mesh, state, face, power, rng, [&](int from, const Vec3& org, const Vec3& dir) {
-        return accelerated ? accelerated->nearest_from(from, org, dir) : tracer.nearest_from(from, org, dir, tfar);
-      }, a);
-      ++a.lines;
-      if (++since_report == 4096) {
-        progress.advance(since_report);
-        since_report = 0;
-      }
+    const uint64_t lo = blocks * s / shards, hi = blocks * (s + 1) / shards;
+    for (uint64_t b = lo; b < hi; ++b) {
+      const uint64_t before = a.lines;
+      trace_first_shot_block(mesh, plan, seed, b, nearest, [&](size_t e, uint32_t code) {
+        receive_emitter_lines(state, plan, e, code, 1, a);
+        ++a.lines;
+      });
+      progress.advance(a.lines - before);
     }
-    progress.advance(since_report);
   });
   progress.finish();
 
   // Merge in shard order: the result does not depend on scheduling.
   merge_received(acc, state);
   stats.lines = total;
-  stats.emitter_faces = emitters.size();
+  stats.emitter_faces = plan.emitters.size();
+  stats.global_emitter_faces = plan.global_faces.size();
   if (accelerated) {
     uint64_t shortcuts = accelerated->shortcuts();
     Ranks::sum(&shortcuts, 1);
@@ -120,6 +157,13 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   }
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
+}
+
+FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long budget,
+                          unsigned long long seed, int shards, const std::vector<double>& global_crossings,
+                          const SubsceneNearest* accelerated) {
+  return first_shot(mesh, tracer, state, plan_first_shot(mesh, state, budget, global_crossings), seed, shards,
+                    accelerated);
 }
 
 uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const PointLight& light,

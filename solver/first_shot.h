@@ -3,7 +3,9 @@
 // of the power as accumulated and unshot power (docs/method.md, 7).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "config.h"
@@ -21,6 +23,8 @@ struct FirstShotStats {
   uint64_t global_emitter_faces = 0; // faces whose emission was left to the global lines
   uint64_t associated_hits = 0;      // accelerated: lines ended on an associated patch
   double seconds = 0;
+  bool stored = false;         // read from the store's first_shot.bin instead of traced
+  std::string traced_because;  // with a store: why its first shot was not used
 };
 
 // `global_crossings`: per face, how many global lines of the first pass cross
@@ -33,13 +37,22 @@ struct FirstShotStats {
 std::vector<double> emitter_crossings(const Options& options, std::vector<double> crossings);
 
 class SubsceneNearest;
+class BoxStore;
+
+// What became of one local line, as a code: kEscaped, or the face met (-1:
+// the back of a one-sided surface, which absorbs) and whether the line's face
+// touches it. Codes are small integers: the stored first shot keeps them.
+inline constexpr uint32_t kEscaped = 0;
+inline uint32_t met_code(int met, bool contact) { return 2 * static_cast<uint32_t>(met + 1) + (contact ? 2 : 1); }
+inline int code_face(uint32_t code) { return static_cast<int>((code - 1) / 2) - 1; }
+inline bool code_contact(uint32_t code) { return code != kEscaped && (code - 1) % 2 == 1; }
+// One past the largest code of a mesh of `faces` faces.
+inline uint32_t code_limit(size_t faces) { return met_code(static_cast<int>(faces), true); }
 
 // One local line from `face`: a uniform point of its patch, a cosine-
-// distributed direction; `power` goes to the face the line meets first
-// (`nearest(patch, org, dir)`), escaping when it meets none.
+// distributed direction; returns what it meets first (`nearest(patch, org, dir)`).
 template <typename Nearest>
-void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int face, const double* power, Rng& rng,
-                      const Nearest& nearest, ShardAccumulator& acc) {
+uint32_t local_line_outcome(const PatchMesh& mesh, int face, Rng& rng, const Nearest& nearest) {
   const int patch = mesh.face_patch[face];
   const Vec3 n = mesh.face_normal(face);
   const Vec3 org = uniform_point(mesh, mesh.patches[patch], rng);
@@ -48,21 +61,87 @@ void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int fa
     // distance 0, whatever the direction the cosine draws next (grazing
     // lines may slip past a surface at distance 0).
     const NearestHit probe = nearest(patch, org, n);
-    if (probe.patch >= 0 && mesh.touching(patch, probe.patch)) {
-      receive_in_contact(state, face, mesh.face_met(probe.patch, n), power, acc);
-      return;
-    }
+    if (probe.patch >= 0 && mesh.touching(patch, probe.patch)) return met_code(mesh.face_met(probe.patch, n), true);
   }
   const Vec3 dir = cosine_direction(n, rng);
   const NearestHit hit = nearest(patch, org, dir);
-  if (hit.patch < 0) {
-    for (int c = 0; c < state.channels; ++c) acc.escaped[c] += power[c];
-    return;
-  }
-  const int met = mesh.face_met(hit.patch, dir);
-  if (mesh.touching(patch, hit.patch)) receive_in_contact(state, face, met, power, acc);
-  else receive(state, met, power, acc);
+  if (hit.patch < 0) return kEscaped;
+  return met_code(mesh.face_met(hit.patch, dir), mesh.touching(patch, hit.patch));
 }
+
+// `power` from `face` to where a line of outcome `code` took it.
+inline void receive_outcome(const RadiosityState& state, int face, uint32_t code, const double* power,
+                            ShardAccumulator& acc) {
+  if (code == kEscaped) {
+    for (int c = 0; c < state.channels; ++c) acc.escaped[c] += power[c];
+  } else if (code_contact(code)) {
+    receive_in_contact(state, face, code_face(code), power, acc);
+  } else {
+    receive(state, code_face(code), power, acc);
+  }
+}
+
+// One local line from `face` carrying `power` to the face it meets first,
+// escaping when it meets none.
+template <typename Nearest>
+void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int face, const double* power, Rng& rng,
+                      const Nearest& nearest, ShardAccumulator& acc) {
+  receive_outcome(state, face, local_line_outcome(mesh, face, rng, nearest), power, acc);
+}
+
+// Which faces the first shot shoots with local lines and how many lines each.
+struct FirstShotPlan {
+  std::vector<int> emitters;          // in face order
+  std::vector<uint64_t> first{0};     // first line of each emitter; first.back() = lines in all
+  std::vector<int> global_faces;      // emitting faces whose emission the global lines shoot
+  uint64_t lines() const { return first.back(); }
+  uint64_t count(size_t e) const { return first[e + 1] - first[e]; }
+  bool operator==(const FirstShotPlan&) const = default;
+};
+
+// `budget` lines shared by power among the emitting faces, at least one each;
+// with `global_crossings` (first_shot.mode = "auto"), an emitting face that
+// the global lines cross at least as often is left to them.
+FirstShotPlan plan_first_shot(const PatchMesh& mesh, const RadiosityState& state, long long budget,
+                              const std::vector<double>& global_crossings);
+
+// The first shot of a run: the plan for its emitting faces (first_shot.lines
+// shared by power between the faces and the lights; with `store`, the
+// crossings of its lines decide first_shot.mode = "auto", without it a
+// forecast of a classic pass), and the lines of each light.
+struct RunFirstShot {
+  FirstShotPlan plan;
+  std::vector<long long> light_lines;
+};
+RunFirstShot plan_run_first_shot(const Options& options, const PatchMesh& mesh, const RadiosityState& state,
+                                 const BoxStore* store, const std::vector<PointLight>& lights);
+
+// Local lines are drawn in blocks of this many, each block with a random
+// stream of its own: a line's fate does not depend on threads, shards or ranks.
+inline constexpr uint64_t kFirstShotBlock = 4096;
+Rng first_shot_rng(unsigned long long seed, uint64_t block);
+
+// Calls line(e, code) for lines [block * kFirstShotBlock, ...) of block
+// `block` of `plan` in order (e: the emitter's index in the plan).
+template <typename Nearest, typename Line>
+void trace_first_shot_block(const PatchMesh& mesh, const FirstShotPlan& plan, unsigned long long seed, uint64_t block,
+                            const Nearest& nearest, const Line& line) {
+  Rng rng = first_shot_rng(seed, block);
+  const uint64_t lo = block * kFirstShotBlock, hi = std::min(plan.lines(), lo + kFirstShotBlock);
+  size_t e = std::upper_bound(plan.first.begin(), plan.first.end(), lo) - plan.first.begin() - 1;
+  for (uint64_t l = lo; l < hi; ++l) {
+    while (l >= plan.first[e + 1]) ++e;
+    line(e, local_line_outcome(mesh, plan.emitters[e], rng, nearest));
+  }
+}
+
+// Adds `code` received from plan.emitters[e]: `lines` of its lines' power
+// (its emitted power over its line count) at once.
+void receive_emitter_lines(const RadiosityState& state, const FirstShotPlan& plan, size_t e, uint32_t code, uint64_t lines,
+                           ShardAccumulator& acc);
+
+// Moves the emission of plan.global_faces to their unshot power.
+void leave_to_global_lines(const FirstShotPlan& plan, RadiosityState& state);
 
 // A point source ([[light]]): its radiant power is added to the emitted
 // energy and shot along `lines` lines from its position, drawn in
@@ -71,8 +150,12 @@ void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int fa
 uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const PointLight& light,
                      long long lines, unsigned long long seed, int shards);
 
-// `accelerated`: find nearest hits through the subscenes' associated patches
+// Traces `plan` (its global faces left to the global lines). `accelerated`:
+// find nearest hits through the subscenes' associated patches
 // (first_shot.accelerate) instead of the whole scene's tracer.
+FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const FirstShotPlan& plan,
+                          unsigned long long seed, int shards, const SubsceneNearest* accelerated = nullptr);
+// The same with the plan of `lines` lines.
 FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, long long lines,
                           unsigned long long seed, int shards, const std::vector<double>& global_crossings = {},
                           const SubsceneNearest* accelerated = nullptr);

@@ -115,7 +115,8 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
                    {"total", r.timings.total}}},
       {"first_shot", {{"lines", r.shot.lines}, {"emitter_faces", r.shot.emitter_faces},
                       {"associated_hits", r.shot.associated_hits},
-                      {"global_emitter_faces", r.shot.global_emitter_faces}, {"from_checkpoint", r.resumed}}},
+                      {"global_emitter_faces", r.shot.global_emitter_faces}, {"from_checkpoint", r.resumed},
+                      {"from_store", r.shot.stored}, {"traced_because", r.shot.traced_because}}},
       {"lights", [&] {
          json lights = json::array();
          for (const SolveRecord::Light& l : r.lights)

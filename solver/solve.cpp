@@ -12,6 +12,7 @@
 #include "directory_lock.h"
 #include "error.h"
 #include "first_shot.h"
+#include "stored_shot.h"
 #include "json_text.h"
 #include "mpath_version.h"
 #include "prepared_scene.h"
@@ -54,30 +55,29 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
     return;
   }
   if (flags.resume) spdlog::warn("--resume: no checkpoint at {}; starting from the beginning", checkpoint.path.string());
-  std::vector<double> crossings;
-  if (store) crossings = store->face_crossings(mesh.face_count());
-  else crossings = forecast_crossings(mesh, static_cast<double>(options.lines.total));
+  const RunFirstShot shot = plan_run_first_shot(options, mesh, state, store, lights);
   std::unique_ptr<SubsceneNearest> accelerated;
   if (options.first_shot.accelerate && store && store->box_count() > 1 && !store->line_sets())
     accelerated = std::make_unique<SubsceneNearest>(mesh, *store);
-  // first_shot.lines shared by power between the emitting faces and the lights.
-  double faces_power = state.emitted_total(), lights_power = 0;
-  for (const PointLight& l : lights) lights_power += l.power() * state.channels;
-  const double total_power = faces_power + lights_power;
-  const auto share = [&](double power) {  // nothing emits at all (lights at multiplier 0): no lines
-    return total_power > 0
-               ? static_cast<long long>(std::llround(static_cast<double>(first_shot_lines(options)) * power / total_power))
-               : 0LL;
-  };
-  record.shot = first_shot(mesh, tracer, state, lights.empty() ? first_shot_lines(options) : share(faces_power),
-                           options.lines.seed, options.solver.shards, emitter_crossings(options, std::move(crossings)),
-                           accelerated.get());
+  // A kept store's first shot is read, not traced, when this run would
+  // trace the same lines (stored_shot.h).
+  std::string traced_because;
+  if (store && accelerated) traced_because = "first_shot.accelerate traces through the associated patches";
+  else if (store)
+    traced_because = replay_stored_shot(options.store.dir / kStoredShotFile, mesh, shot.plan, options.lines.seed, state,
+                                        record.shot);
+  if (!store || !traced_because.empty()) {
+    if (store) spdlog::info("first shot traced: {}", traced_because);
+    record.shot = first_shot(mesh, tracer, state, shot.plan, options.lines.seed, options.solver.shards, accelerated.get());
+    record.shot.traced_because = traced_because;
+  } else {
+    spdlog::info("first shot: {} local lines read from the store ({:.2f} s)", record.shot.lines, record.shot.seconds);
+  }
   for (size_t l = 0; l < lights.size(); ++l) {
-    const long long lines = std::max<long long>(10'000, share(lights[l].power() * state.channels));
-    const uint64_t shot =
-        shoot_light(mesh, tracer, state, lights[l], lines, options.lines.seed + 7919 * (l + 1), options.solver.shards);
-    record.shot.lines += shot;
-    record.lights[l].first_shot_lines = shot;
+    const uint64_t shot_lines = shoot_light(mesh, tracer, state, lights[l], shot.light_lines[l],
+                                            options.lines.seed + 7919 * (l + 1), options.solver.shards);
+    record.shot.lines += shot_lines;
+    record.lights[l].first_shot_lines = shot_lines;
   }
   checkpoint.save(state, record.iterations);
 }

@@ -412,6 +412,13 @@ store_case("file gone", "missing (listed in", lambda d: os.remove(os.path.join(d
 store_case("file size", "bytes, the manifest says", damage("box0000.lines", 0, cut=1000))
 store_case("file hash", "its contents do not match the hash in", damage("box0000.lines", 2000))
 store_case("first line", "expected 0 (a shard is missing)", set_in_manifest(["files", 0, "first_line"], 5))
+# The first shot mpath-preprocess keeps beside the box files (first_shot.bin).
+store_case("first shot magic", "not a first-shot file (wrong magic)", damage("first_shot.bin", 0))
+store_case("first shot cut", "first_shot.bin: plan: truncated", damage("first_shot.bin", 0, cut=12))
+store_case("first shot bytes", "the store's first shot is damaged", damage("first_shot.bin", 30))
+store_case("first shot end", "truncated (no end mark)", damage("first_shot.bin", 0, cut=-8))
+store_case("first shot tail", "corrupted (bytes after the end mark)", lambda d: open(
+    os.path.join(d, "store", "first_shot.bin"), "ab").write(b"x"))
 
 # ---- checkpoints -------------------------------------------------------------
 

@@ -1,0 +1,262 @@
+// The store's first shot (first_shot.bin): what mpath-preprocess writes, a
+// solve on the store reads instead of tracing, and it must give what tracing
+// the same plan gives; another plan is traced, a damaged file is an error.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "error.h"
+#include "stored_shot.h"
+#include "test_util.h"
+#include "varint.h"
+#include "zstd_frame.h"
+
+namespace mpath {
+namespace {
+
+using test::TempDir;
+
+// A closed room with random boxes in it: floating, standing on the floor
+// (faces in contact), one from floor to ceiling; some of them and part of
+// the ceiling emit, in random colours.
+Scene random_room(unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Scene scene;
+  scene.file = "random room";
+  const double w = 2 + 2 * u(rng), d = 1.5 + 2 * u(rng), h = 1 + u(rng);
+  const int wall = test::add_material(scene, "wall", 0.3 + 0.6 * u(rng), 0);
+  test::add_box(scene, {0, 0, 0}, {w, d, h}, true, wall, test::add_object(scene, "room"));
+  const int lamp = test::add_material(scene, "lamp", 0.2, 5 + 20 * u(rng));
+  scene.materials[lamp].emission = {5 + 20 * u(rng), 5 + 20 * u(rng), 5 + 20 * u(rng)};
+  test::add_quad(scene, {0.3 * w, 0.3 * d, h - 1e-3}, {0.3 * w, 0.5 * d, h - 1e-3}, {0.5 * w, 0.5 * d, h - 1e-3},
+                 {0.5 * w, 0.3 * d, h - 1e-3}, lamp, test::add_object(scene, "ceiling lamp"));
+  const int boxes = 2 + static_cast<int>(rng() % 5);
+  for (int b = 0; b < boxes; ++b) {
+    const bool glowing = rng() % 3 == 0;
+    const int m = test::add_material(scene, fmt::format("box {}", b), 0.1 + 0.8 * u(rng), glowing ? 2 * u(rng) : 0);
+    const double x = u(rng) * (w - 0.5), y = u(rng) * (d - 0.5), sx = 0.1 + 0.4 * u(rng), sy = 0.1 + 0.4 * u(rng);
+    const double z0 = b == 0 ? 0.0 : (rng() % 2 ? 0.0 : u(rng) * 0.5 * h), z1 = b == 0 ? h : z0 + 0.1 + 0.4 * u(rng) * h;
+    test::add_box(scene, {x, y, z0}, {x + sx, y + sy, std::min(z1, h)}, false, m,
+                  test::add_object(scene, fmt::format("box {}", b)));
+  }
+  return scene;
+}
+
+struct Prepared {
+  PatchMesh mesh;
+  RadiosityState state;
+};
+
+Prepared prepared_room(const Scene& scene, double max_patch_area) {
+  Prepared s{build_mesh(scene, max_patch_area), {}};
+  s.state = make_state(scene, s.mesh);
+  return s;
+}
+
+// Every face's Phi and U, and the energy terms, equal to a relative 1e-12.
+void expect_same_state(const RadiosityState& a, const RadiosityState& b, const std::string& what) {
+  ASSERT_EQ(a.phi.size(), b.phi.size());
+  double scale = 0;
+  for (double p : a.phi) scale = std::max(scale, std::abs(p));
+  for (size_t i = 0; i < a.phi.size(); ++i) {
+    ASSERT_NEAR(a.phi[i], b.phi[i], 1e-12 * scale) << what << ", entry " << i;
+    ASSERT_NEAR(a.unshot[i], b.unshot[i], 1e-12 * scale) << what << ", entry " << i;
+  }
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(a.energy.absorbed[c], b.energy.absorbed[c], 1e-12 * a.emitted_total()) << what;
+    EXPECT_NEAR(a.energy.escaped[c], b.energy.escaped[c], 1e-12 * a.emitted_total()) << what;
+  }
+}
+
+// Read back, the stored first shot is the traced one, on random rooms, with
+// every emitter shot locally and with some left to the global lines.
+TEST(StoredShot, ReadingItGivesWhatTracingTheSamePlanGives) {
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    TempDir dir;
+    Prepared s = prepared_room(random_room(seed), 0.02);
+    ASSERT_FALSE(s.mesh.contact_plane.empty()) << "the boxes on the floor touch it";
+    const Tracer tracer(s.mesh);
+    std::vector<double> crossings;
+    if (seed % 2 == 0) {  // the global lines take the faces they cross often
+      crossings.assign(s.mesh.face_count(), 0.0);
+      for (size_t f = 0; f < crossings.size(); f += 3) crossings[f] = 1e9;
+    }
+    const long long budget = 20'000 + 7'919 * seed;
+    const FirstShotPlan plan = plan_first_shot(s.mesh, s.state, budget, crossings);
+    EXPECT_EQ(!plan.global_faces.empty(), seed % 2 == 0);
+    const auto path = dir / kStoredShotFile;
+    write_stored_shot(path, s.mesh, tracer, plan, seed, 3);
+
+    RadiosityState traced = s.state, stored = s.state;
+    first_shot(s.mesh, tracer, traced, plan, seed, 1 + static_cast<int>(seed % 4));
+    FirstShotStats stats;
+    ASSERT_EQ(replay_stored_shot(path, s.mesh, plan, seed, stored, stats), "") << "seed " << seed;
+    EXPECT_TRUE(stats.stored);
+    EXPECT_EQ(stats.lines, plan.lines());
+    expect_same_state(traced, stored, fmt::format("room {}", seed));
+    EXPECT_LT(std::abs(stored.energy_residual()), 1e-12 * stored.emitted_total()) << "emitted = absorbed + escaped + unshot";
+  }
+}
+
+// A line's fate does not depend on how many shards trace it.
+TEST(StoredShot, TheTracedFirstShotIsTheSameOnAnyNumberOfShards) {
+  Prepared s = prepared_room(random_room(11), 0.02);
+  const Tracer tracer(s.mesh);
+  const FirstShotPlan plan = plan_first_shot(s.mesh, s.state, 30'000, {});
+  RadiosityState one = s.state, five = s.state;
+  first_shot(s.mesh, tracer, one, plan, 3, 1);
+  first_shot(s.mesh, tracer, five, plan, 3, 5);
+  expect_same_state(one, five, "1 and 5 shards");
+}
+
+// The lines' fates do not depend on the emitters' power: the same plan with
+// every emitter three times as bright and with other colours reads back as
+// tracing it with those emitters.
+TEST(StoredShot, AStoredFirstShotServesOtherEmission) {
+  TempDir dir;
+  const Scene scene = random_room(5);
+  Prepared s = prepared_room(scene, 0.02);
+  const Tracer tracer(s.mesh);
+  const FirstShotPlan plan = plan_first_shot(s.mesh, s.state, 40'000, {});
+  write_stored_shot(dir / kStoredShotFile, s.mesh, tracer, plan, 9, 3);
+
+  Scene brighter = scene;
+  for (Material& m : brighter.materials)
+    for (double& e : m.emission) e *= 3;
+  RadiosityState state = make_state(brighter, s.mesh);
+  EXPECT_EQ(plan_first_shot(s.mesh, state, 40'000, {}), plan) << "the same shares of the power";
+  RadiosityState traced = state;
+  first_shot(s.mesh, tracer, traced, plan, 9, 2);
+  FirstShotStats stats;
+  ASSERT_EQ(replay_stored_shot(dir / kStoredShotFile, s.mesh, plan, 9, state, stats), "");
+  expect_same_state(traced, state, "three times the emission");
+}
+
+// Another plan or seed is not read: the reason says what differs and the
+// state is left as it was.
+TEST(StoredShot, AnotherPlanIsNotReadAndSaysWhy) {
+  TempDir dir;
+  Prepared s = prepared_room(random_room(3), 0.02);
+  const Tracer tracer(s.mesh);
+  const FirstShotPlan plan = plan_first_shot(s.mesh, s.state, 10'000, {});
+  const auto path = dir / kStoredShotFile;
+  FirstShotStats stats;
+  RadiosityState state = s.state;
+  EXPECT_NE(replay_stored_shot(path, s.mesh, plan, 1, state, stats).find("the store has no first_shot.bin"),
+            std::string::npos);
+  write_stored_shot(path, s.mesh, tracer, plan, 1, 3);
+  const FirstShotPlan more = plan_first_shot(s.mesh, s.state, 20'000, {});
+  EXPECT_NE(replay_stored_shot(path, s.mesh, more, 1, state, stats).find("other line counts"), std::string::npos);
+  EXPECT_NE(replay_stored_shot(path, s.mesh, plan, 2, state, stats).find("lines.seed = 1"), std::string::npos);
+  std::vector<double> crossings(s.mesh.face_count(), 1e9);
+  const FirstShotPlan global = plan_first_shot(s.mesh, s.state, 10'000, crossings);
+  EXPECT_NE(replay_stored_shot(path, s.mesh, global, 1, state, stats).find("emitting faces are not the store's"),
+            std::string::npos);
+  EXPECT_EQ(state.phi, s.state.phi);
+  EXPECT_EQ(state.unshot, s.state.unshot);
+  EXPECT_FALSE(stats.stored);
+}
+
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Every cut and every flipped byte of the file is an InputError naming it,
+// before the state changes; never a crash or a wrong answer.
+TEST(StoredShot, ADamagedFileIsAnErrorNamingIt) {
+  TempDir dir;
+  Prepared s = prepared_room(random_room(4), 0.05);
+  const Tracer tracer(s.mesh);
+  const FirstShotPlan plan = plan_first_shot(s.mesh, s.state, 2 * kFirstShotBlock * 64 + 100, {});
+  const auto path = dir / kStoredShotFile;
+  write_stored_shot(path, s.mesh, tracer, plan, 1, 3);
+  const std::string good = test::read_file(path);
+  const auto read = [&](const std::string& bytes) {
+    test::write_file(path, bytes);
+    RadiosityState state = s.state;
+    FirstShotStats stats;
+    const std::string why = message_of([&] { replay_stored_shot(path, s.mesh, plan, 1, state, stats); });
+    if (!why.empty()) EXPECT_EQ(state.phi, s.state.phi) << "the state is left as it was";
+    return why;
+  };
+  EXPECT_EQ(read(good), "");
+  std::mt19937 rng(1);
+  for (size_t cut = 0; cut < good.size(); cut += 1 + rng() % 97) {
+    const std::string why = read(good.substr(0, cut));
+    EXPECT_NE(why.find("first_shot.bin"), std::string::npos) << "cut at " << cut << ": " << why;
+  }
+  for (int trial = 0; trial < 300; ++trial) {
+    std::string bad = good;
+    const size_t at = trial < 40 ? static_cast<size_t>(trial) : rng() % bad.size();
+    bad[at] = static_cast<char>(bad[at] ^ (1 << (rng() % 8)));
+    const std::string why = read(bad);
+    EXPECT_NE(why.find("the store's first shot is damaged"), std::string::npos) << "byte " << at << ": " << why;
+  }
+  EXPECT_NE(read("XXXXXXXXXXXXXXXXXXXXXXXX").find("not a first-shot file (wrong magic)"), std::string::npos);
+  EXPECT_NE(read(good + "x").find("corrupted (bytes after the end mark)"), std::string::npos);
+  EXPECT_NE(read(good.substr(0, good.size() - 8)).find("truncated (no end mark)"), std::string::npos);
+
+  test::write_file(path, good);
+  unsigned long long seed = 0;
+  EXPECT_NE(message_of([&] { read_stored_plan(path, s.mesh.face_count() + 1, seed); })
+                .find("plan: made for a mesh of another number of faces"),
+            std::string::npos);
+  // A plan frame of another format version, well formed otherwise.
+  std::string raw;
+  for (uint64_t v : {2, 1, 4096, 64}) linestore::put_varint(raw, v);
+  const std::string frame = linestore::zstd_compress(raw, 3, true);
+  std::string file = good.substr(0, 8);
+  for (uint64_t v : {uint64_t{raw.size()}, uint64_t{frame.size()}})
+    for (int i = 0; i < 8; ++i) file += static_cast<char>(v >> (8 * i));
+  test::write_file(path, file + frame);
+  EXPECT_NE(message_of([&] { read_stored_plan(path, s.mesh.face_count(), seed); })
+                .find("plan: written by another version of mpath"),
+            std::string::npos);
+}
+
+// End to end: mpath-preprocess writes first_shot.bin, mpath-solve reads it
+// (the report says so) and solves what it solves without the file; a run
+// with another first_shot.lines traces its own and says why.
+TEST(StoredShot, TheSolveReadsThePreprocessorsFirstShot) {
+  TempDir dir;
+  const std::string config = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box.toml";
+  const std::string common = " -q lines.total=150000 store.chunk_lines=4096 solver.method=hierarchical output.png=false"
+                             " output.exr=false store.dir=" + (dir / "store").string();
+  const auto solve = [&](const std::string& out, const std::string& more) {
+    const test::RunResult r = test::run(test::solve_bin() + " " + config + common + " output.dir=" + (dir / out).string() + more);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return nlohmann::json::parse(test::read_file(dir / out / "report.json"));
+  };
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common).exit_code, 0);
+  ASSERT_TRUE(std::filesystem::exists(dir / "store" / kStoredShotFile));
+  const auto stats = nlohmann::json::parse(test::read_file(dir / "store" / "preprocess.json"));
+  EXPECT_EQ(stats["first_shot_lines"].get<uint64_t>(), 75'000u) << "half of lines.total";
+
+  const nlohmann::json read = solve("read", "");
+  EXPECT_TRUE(read["first_shot"]["from_store"].get<bool>());
+  EXPECT_EQ(read["first_shot"]["lines"].get<uint64_t>(), 75'000u);
+  EXPECT_LT(std::abs(read["energy"]["relative_residual"].get<double>()), 1e-9);
+
+  const nlohmann::json other = solve("other", " first_shot.lines=60000");
+  EXPECT_FALSE(other["first_shot"]["from_store"].get<bool>());
+  EXPECT_NE(other["first_shot"]["traced_because"].get<std::string>().find("other line counts"), std::string::npos);
+
+  std::filesystem::rename(dir / "store" / kStoredShotFile, dir / "first_shot.kept");
+  const nlohmann::json traced = solve("traced", "");
+  EXPECT_FALSE(traced["first_shot"]["from_store"].get<bool>());
+  EXPECT_EQ(test::read_file(dir / "read" / "solution.ply"), test::read_file(dir / "traced" / "solution.ply"))
+      << "the solutions agree to the last bit of their floats";
+  // mpath-preprocess run again keeps the store and writes the missing first shot.
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common).exit_code, 0);
+  EXPECT_EQ(test::read_file(dir / "store" / kStoredShotFile), test::read_file(dir / "first_shot.kept"));
+}
+
+}  // namespace
+}  // namespace mpath
