@@ -130,10 +130,12 @@ bool merge_parts(const fs::path& dir, const ShardSpec& shard, linestore::Manifes
 
 namespace {
 
-// Traces the shard's part of one box's lines into one file; adds to `stats`.
+// Traces the shard's part of one box's lines into one file; adds to `stats`,
+// and to `face_crossings` how often the lines cross each face (as
+// BoxStore::face_crossings counts them from the file).
 linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, const Hierarchy& hierarchy, int box,
                                uint64_t lines, const ShardSpec& shard, const fs::path& dir, int threads,
-                               PreprocessStats& stats) {
+                               PreprocessStats& stats, std::vector<double>& face_crossings) {
   const ChunkTracer chunks(options, mesh, hierarchy, box, lines);
   const uint64_t lo = chunks.chunk_count() * (shard.index - 1) / shard.count;
   const uint64_t hi = chunks.chunk_count() * shard.index / shard.count;
@@ -192,6 +194,10 @@ linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, co
   std::vector<std::pair<uint64_t, uint32_t>> first_met(total.first_met.begin(), total.first_met.end());
   std::sort(first_met.begin(), first_met.end());
   linestore::select_associated(first_met, total.counts);
+  const std::vector<uint32_t>& patches = hierarchy.boxes[box].patches;
+  for (size_t k = 0; k < patches.size(); ++k)
+    for (int face : mesh.patch_faces[patches[k]])
+      if (face >= 0) face_crossings[face] += total.counts.patch_crossings[k];
   auto t0 = clock::now();
   writer.finish(total.counts);
   write_seconds += seconds(clock::now() - t0);
@@ -209,9 +215,12 @@ linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, co
 
 // Once the store is complete, the first shot a solve of it would trace
 // (stored_shot.h); not with first_shot.accelerate, whose solves trace it.
-void add_first_shot(const Options& options, const PreparedScene& prepared, PreprocessStats& stats) {
+// `face_crossings`: counted by this run over every line of the store (null:
+// the store is opened to count them).
+void add_first_shot(const Options& options, const PreparedScene& prepared, PreprocessStats& stats,
+                    const std::vector<double>* face_crossings) {
   if (options.first_shot.accelerate) return;
-  const StoredShotStats shot = store_first_shot(options, prepared);
+  const StoredShotStats shot = store_first_shot(options, prepared, face_crossings);
   stats.first_shot_lines = shot.lines;
   stats.first_shot_bytes = shot.bytes;
   stats.first_shot_seconds = shot.seconds;
@@ -272,7 +281,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
     spdlog::info("{}: shard {}/{} finished and verified earlier, not traced again", dir.string(), shard.index, shard.count);
     stats.skipped = true;
     if (shard.count > 1) stats.manifest_written = merge_parts(dir, shard, base);
-    if (shard.count == 1 || stats.manifest_written) add_first_shot(options, prepared, stats);
+    if (shard.count == 1 || stats.manifest_written) add_first_shot(options, prepared, stats, nullptr);
     return stats;
   }
   // The store is incomplete from now until this run's manifest is written.
@@ -282,15 +291,17 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
 
   linestore::Manifest m = base;
   nlohmann::json per_box = nlohmann::json::array();
+  std::vector<double> face_crossings(mesh.face_count(), 0.0);
   for (int b : hierarchy.depth_order) {
     const auto t0 = clock::now();
-    m.files.push_back(trace_box(options, mesh, hierarchy, b, budget[b], shard, dir, threads, stats));
+    m.files.push_back(trace_box(options, mesh, hierarchy, b, budget[b], shard, dir, threads, stats, face_crossings));
     per_box.push_back({{"box", b}, {"lines", m.files.back().lines}, {"events", m.files.back().events},
                        {"bytes", m.files.back().bytes}, {"seconds", seconds(clock::now() - t0)}});
   }
   linestore::write_manifest(record, m);
   stats.manifest_written = shard.count == 1 || merge_parts(dir, shard, base);
-  if (stats.manifest_written) add_first_shot(options, prepared, stats);
+  // A shard's lines are part of the store's: the last shard opens the store to count them all.
+  if (stats.manifest_written) add_first_shot(options, prepared, stats, shard.count == 1 ? &face_crossings : nullptr);
   stats.wall_seconds = seconds(clock::now() - start);
   const nlohmann::json timings = {{"shard", fmt::format("{}/{}", shard.index, shard.count)}, {"lines", stats.lines},
                                  {"events", stats.events}, {"bytes", stats.bytes}, {"raw_bytes", stats.raw_bytes},

@@ -85,8 +85,14 @@ FirstShotPlan plan_first_shot(const PatchMesh& mesh, const RadiosityState& state
 
 RunFirstShot plan_run_first_shot(const Options& options, const PatchMesh& mesh, const RadiosityState& state,
                                  const BoxStore* store, const std::vector<PointLight>& lights) {
-  std::vector<double> crossings = store ? store->face_crossings(mesh.face_count())
-                                        : forecast_crossings(mesh, static_cast<double>(options.lines.total));
+  return plan_run_first_shot(options, mesh, state,
+                             store ? store->face_crossings(mesh.face_count())
+                                   : forecast_crossings(mesh, static_cast<double>(options.lines.total)),
+                             lights);
+}
+
+RunFirstShot plan_run_first_shot(const Options& options, const PatchMesh& mesh, const RadiosityState& state,
+                                 std::vector<double> crossings, const std::vector<PointLight>& lights) {
   // first_shot.lines shared by power between the emitting faces and the lights.
   const double faces_power = state.emitted_total();
   double lights_power = 0;

@@ -115,6 +115,10 @@ struct RunFirstShot {
 };
 RunFirstShot plan_run_first_shot(const Options& options, const PatchMesh& mesh, const RadiosityState& state,
                                  const BoxStore* store, const std::vector<PointLight>& lights);
+// The same with the store's crossing counts per face given (what
+// BoxStore::face_crossings returns), for a store not opened.
+RunFirstShot plan_run_first_shot(const Options& options, const PatchMesh& mesh, const RadiosityState& state,
+                                 std::vector<double> store_crossings, const std::vector<PointLight>& lights);
 
 // Local lines are drawn in blocks of this many, each block with a random
 // stream of its own: a line's fate does not depend on threads, shards or ranks.

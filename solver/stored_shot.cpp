@@ -308,16 +308,19 @@ std::string replay_stored_shot(const fs::path& path, const PatchMesh& mesh, cons
   return "";
 }
 
-StoredShotStats store_first_shot(const Options& options, const PreparedScene& prepared) {
+StoredShotStats store_first_shot(const Options& options, const PreparedScene& prepared,
+                                 const std::vector<double>* crossings) {
   const auto start = std::chrono::steady_clock::now();
   const PatchMesh& mesh = prepared.mesh;
   const fs::path path = options.store.dir / kStoredShotFile;
   StoredShotStats stats;
-  const BoxStore store(options, mesh);
   RadiosityState state = make_state(prepared.scene, mesh);
   std::vector<PointLight> lights;
   for (const LightOptions& l : options.scene.lights) lights.push_back(make_light(l));
-  const FirstShotPlan plan = plan_run_first_shot(options, mesh, state, &store, lights).plan;
+  const FirstShotPlan plan =
+      (crossings ? plan_run_first_shot(options, mesh, state, *crossings, lights)
+                 : plan_run_first_shot(options, mesh, state, BoxStore(options, mesh).face_crossings(mesh.face_count()), lights))
+          .plan;
   stats.lines = plan.lines();
   if (fs::exists(path)) {
     try {

@@ -42,7 +42,10 @@ std::string replay_stored_shot(const std::filesystem::path& path, const PatchMes
 
 // What mpath-preprocess runs once the store in options.store.dir is
 // complete: the first shot a solve with these options would trace, written
-// beside the box files, unless the file there holds it already.
-StoredShotStats store_first_shot(const Options& options, const PreparedScene& prepared);
+// beside the box files, unless the file there holds it already. `crossings`:
+// the store's crossing counts per face (BoxStore::face_crossings), when the
+// caller counted them; otherwise the store is opened to read them.
+StoredShotStats store_first_shot(const Options& options, const PreparedScene& prepared,
+                                 const std::vector<double>* crossings = nullptr);
 
 }  // namespace mpath
