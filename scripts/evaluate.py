@@ -769,8 +769,9 @@ from this run's CSVs; what follows explains them, from the profiles in
   kept store must match fresh stores bit for bit; docs/user-guide.md).
   What is left for the first run is a cheaper preprocessor.
 - **Where a target is not met** (first runs on BIG ROOM and office2, the
-  kept-store solve on BIG ROOM and office2). A first run spends about
-  two thirds of its time preprocessing (the table above), whose profile
+  kept-store solve on office2). A first run spends about four fifths of
+  its time preprocessing, the first shot it traces for the store included
+  (the table above); the preprocess's profile
   (BIG ROOM, docs/performance.md) is Embree's tracing 40 %, zstd 12 %,
   line generation 8 %, encoding 6 %, the class counts 4.5 %: per line
   about what a classic pass costs, so a first run's speed-up at equal
@@ -784,8 +785,12 @@ from this run's CSVs; what follows explains them, from the profiles in
   the root. A kept-store solve reads its first shot from the store
   (`first_shot.bin`, traced once by `mpath-preprocess`; tracing it was
   41-45 % of the hierarchical solve on ROOM, BIG ROOM and office2 before
-  it was kept), so it is the transport loop over the stored lines and
-  little else.
+  it was kept, and the kept-store medians rose from 5.0x, 4.2x, 7.1x and
+  3.1x to the figures above), so it is the transport loop over the stored
+  lines and little else. On office2 that loop is stored Multipath's (one
+  box), whose passes cost what classic's cost less the tracing: 4.5x, not
+  5x. A first run pays the first shot in the preprocess instead of the
+  solve, and a little more (a BVH of its own and the file, 0.01-0.04 s).
 """
 
 
