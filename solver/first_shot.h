@@ -47,7 +47,7 @@ inline uint32_t met_code(int met, bool contact) { return 2 * static_cast<uint32_
 inline int code_face(uint32_t code) { return static_cast<int>((code - 1) / 2) - 1; }
 inline bool code_contact(uint32_t code) { return code != kEscaped && (code - 1) % 2 == 1; }
 // One past the largest code of a mesh of `faces` faces.
-inline uint32_t code_limit(size_t faces) { return met_code(static_cast<int>(faces), true); }
+inline uint32_t code_limit(size_t faces) { return met_code(static_cast<int>(faces) - 1, true) + 1; }
 
 // One local line from `face`: a uniform point of its patch, a cosine-
 // distributed direction; returns what it meets first (`nearest(patch, org, dir)`).

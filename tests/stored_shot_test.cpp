@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 
 #include "error.h"
 #include "stored_shot.h"
@@ -67,6 +68,23 @@ void expect_same_state(const RadiosityState& a, const RadiosityState& b, const s
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(a.energy.absorbed[c], b.energy.absorbed[c], 1e-12 * a.emitted_total()) << what;
     EXPECT_NEAR(a.energy.escaped[c], b.energy.escaped[c], 1e-12 * a.emitted_total()) << what;
+  }
+}
+
+// A fate's code names a face of the mesh, -1 or none, and the codes below
+// code_limit are exactly those (a reader takes no code at or above it).
+TEST(StoredShot, CodesNameFacesOfTheMeshOnly) {
+  for (size_t faces : {1, 2, 12, 1000}) {
+    std::set<uint32_t> codes{kEscaped};
+    for (int f = -1; f < static_cast<int>(faces); ++f)
+      for (bool contact : {false, true}) {
+        const uint32_t code = met_code(f, contact);
+        EXPECT_EQ(code_face(code), f);
+        EXPECT_EQ(code_contact(code), contact);
+        codes.insert(code);
+      }
+    EXPECT_EQ(codes.size(), 2 * (faces + 1) + 1);
+    EXPECT_EQ(*codes.rbegin() + 1, code_limit(faces)) << faces << " faces";
   }
 }
 
