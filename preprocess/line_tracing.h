@@ -26,12 +26,12 @@ struct BoxTally {
   void merge_into(BoxTally& total) const;
 };
 
-// A chunk's lines as traced, and their stored order: line k of the file is
-// line order[k] of `lines`.
 // Line indices in order of `key`, ties in index order (the order sorting
 // (key, index) pairs gives).
 void order_by_key(const std::vector<uint64_t>& key, std::vector<uint32_t>& order);
 
+// A chunk's lines as traced, and their stored order: line k of the file is
+// line order[k] of `lines`.
 struct TracedChunk {
   linestore::DecodedChunk lines;
   std::vector<uint32_t> order;

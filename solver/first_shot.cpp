@@ -130,7 +130,7 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   FirstShotStats stats;
   leave_to_global_lines(plan, state);
   const uint64_t total = plan.lines();
-  const uint64_t blocks = (total + kFirstShotBlock - 1) / kFirstShotBlock;
+  const uint64_t blocks = plan.blocks();
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   const auto nearest = [&](int from, const Vec3& org, const Vec3& dir) {
     return accelerated ? accelerated->nearest_from(from, org, dir) : tracer.nearest_from(from, org, dir, tfar);

@@ -96,6 +96,7 @@ struct FirstShotPlan {
   std::vector<int> global_faces;      // emitting faces whose emission the global lines shoot
   uint64_t lines() const { return first.back(); }
   uint64_t count(size_t e) const { return first[e + 1] - first[e]; }
+  uint64_t blocks() const;  // of kFirstShotBlock lines, the last one partly filled
   bool operator==(const FirstShotPlan&) const = default;
 };
 
@@ -123,6 +124,7 @@ RunFirstShot plan_run_first_shot(const Options& options, const PatchMesh& mesh, 
 // Local lines are drawn in blocks of this many, each block with a random
 // stream of its own: a line's fate does not depend on threads, shards or ranks.
 inline constexpr uint64_t kFirstShotBlock = 4096;
+inline uint64_t FirstShotPlan::blocks() const { return (lines() + kFirstShotBlock - 1) / kFirstShotBlock; }
 Rng first_shot_rng(unsigned long long seed, uint64_t block);
 
 // Calls line(e, code) for lines [block * kFirstShotBlock, ...) of block

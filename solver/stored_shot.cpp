@@ -35,8 +35,7 @@ constexpr uint64_t kVersion = 1;
 constexpr uint64_t kBlocksPerFrame = 64;
 
 uint64_t frame_count(const FirstShotPlan& plan) {
-  const uint64_t blocks = (plan.lines() + kFirstShotBlock - 1) / kFirstShotBlock;
-  return (blocks + kBlocksPerFrame - 1) / kBlocksPerFrame;
+  return (plan.blocks() + kBlocksPerFrame - 1) / kBlocksPerFrame;
 }
 
 std::string encode_plan(const FirstShotPlan& plan, unsigned long long seed, size_t faces) {
@@ -79,7 +78,7 @@ void write_frame(std::ostream& out, const std::string& raw, int level) {
 std::string encode_frame(const PatchMesh& mesh, const Tracer& tracer, const FirstShotPlan& plan,
                          unsigned long long seed, uint64_t first_block) {
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
-  const uint64_t blocks = (plan.lines() + kFirstShotBlock - 1) / kFirstShotBlock;
+  const uint64_t blocks = plan.blocks();
   std::string raw;
   std::vector<uint32_t> codes;
   size_t run_emitter = 0;
