@@ -322,9 +322,12 @@ StoredShotStats store_first_shot(const Options& options, const PreparedScene& pr
           .plan;
   stats.lines = plan.lines();
   if (fs::exists(path)) {
+    // Kept only when a solve would read it: its plan, and every frame
+    // checked (a damaged file is written again, as the solve's error says).
     try {
-      unsigned long long seed = 0;
-      if (read_stored_plan(path, mesh.face_count(), seed) == plan && seed == options.lines.seed) {
+      RadiosityState scratch = state;
+      FirstShotStats read;
+      if (replay_stored_shot(path, mesh, plan, options.lines.seed, scratch, read).empty()) {
         stats.bytes = fs::file_size(path);
         spdlog::info("{}: the first shot of this scene, written earlier, kept", path.string());
         return stats;

@@ -286,7 +286,20 @@ TEST(StoredShot, TheSolveReadsThePreprocessorsFirstShot) {
       << "the solutions agree to the last bit of their floats";
   // mpath-preprocess run again keeps the store and writes the missing first shot.
   ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common).exit_code, 0);
-  EXPECT_EQ(test::read_file(dir / "store" / kStoredShotFile), test::read_file(dir / "first_shot.kept"));
+  const std::string good = test::read_file(dir / "first_shot.kept");
+  EXPECT_EQ(test::read_file(dir / "store" / kStoredShotFile), good);
+  // A damaged one (a byte of its last frame of lines, which the plan does
+  // not show) is refused by the solve and written again by the preprocess,
+  // as the solve's message says.
+  std::string bad = good;
+  bad[bad.size() - 20] = static_cast<char>(bad[bad.size() - 20] ^ 0x10);
+  test::write_file(dir / "store" / kStoredShotFile, bad);
+  const test::RunResult refused =
+      test::run(test::solve_bin() + " " + config + common + " output.dir=" + (dir / "refused").string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.output.find("run mpath-preprocess again"), std::string::npos) << refused.output;
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common).exit_code, 0);
+  EXPECT_EQ(test::read_file(dir / "store" / kStoredShotFile), good);
 }
 
 // Where every surface emits, first_shot.mode = "auto" leaves faces to the
