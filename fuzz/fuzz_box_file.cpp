@@ -1,5 +1,9 @@
 // libFuzzer target for the store's box file reader: open, then decode every
-// chunk. A damaged or foreign file may only end in InputError.
+// chunk whole and, as a pass does, its lines in a reversed order (the first
+// half of them). A damaged or foreign file may only end in InputError.
+#include <numeric>
+#include <vector>
+
 #include "box_file.h"
 #include "error.h"
 #include "fuzz_common.h"
@@ -11,7 +15,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     linestore::BoxFileReader reader(path);
     linestore::DecodedChunk chunk;
-    for (size_t c = 0; c < reader.chunks().size(); ++c) reader.read_chunk(c, chunk);
+    std::vector<uint32_t> order;
+    for (size_t c = 0; c < reader.chunks().size(); ++c) {
+      reader.read_chunk(c, chunk);
+      order.resize(chunk.lines());
+      std::iota(order.rbegin(), order.rend(), 0u);
+      reader.read_chunk_lines(c, order.data(), order.size() / 2, chunk);
+    }
   } catch (const InputError&) {
   }
   return 0;

@@ -302,8 +302,15 @@ BoxFileReader::~BoxFileReader() = default;
 void BoxFileReader::read_chunk(size_t index, DecodedChunk& out) {
   const ChunkInfo& c = chunks_.at(index);
   read_frame(c.offset, c.bytes, c.raw_bytes, fmt::format("chunk {}", index), raw_);
-  if (!decode_chunk(reinterpret_cast<const unsigned char*>(raw_.data()), raw_.size(), c.lines, out) ||
-      out.events.size() != c.events)
+  if (!decode_chunk(reinterpret_cast<const unsigned char*>(raw_.data()), raw_.size(), c.lines, c.events, out))
+    fail(fmt::format("chunk {}: corrupted (records do not decode)", index));
+}
+
+void BoxFileReader::read_chunk_lines(size_t index, const uint32_t* order, size_t take, DecodedChunk& out) {
+  const ChunkInfo& c = chunks_.at(index);
+  read_frame(c.offset, c.bytes, c.raw_bytes, fmt::format("chunk {}", index), raw_);
+  if (!decode_chunk_lines(reinterpret_cast<const unsigned char*>(raw_.data()), raw_.size(), c.lines, c.events, order,
+                          take, place_, out))
     fail(fmt::format("chunk {}: corrupted (records do not decode)", index));
 }
 

@@ -103,6 +103,8 @@ class BoxFileReader {
   uint64_t lines() const;
   uint64_t events() const;
   void read_chunk(size_t index, DecodedChunk& out);
+  // Lines order[0 .. take) of a chunk, in that order (decode_chunk_lines).
+  void read_chunk_lines(size_t index, const uint32_t* order, size_t take, DecodedChunk& out);
 
  private:
   [[noreturn]] void fail(const std::string& what) const;
@@ -115,6 +117,7 @@ class BoxFileReader {
   std::vector<ChunkInfo> chunks_;
   BoxCounts counts_;
   std::string compressed_, raw_;
+  std::vector<uint32_t> place_;  // scratch of read_chunk_lines
   struct FreeDctx {
     void operator()(void* dctx) const;
   };

@@ -110,35 +110,70 @@ bool get_ar(const unsigned char* data, size_t size, size_t& pos, uint32_t& ar) {
 }
 }  // namespace
 
-bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, DecodedChunk& out) {
+namespace {
+
+// Decodes a chunk of `lines` records, line i going to place place(i) of
+// `out` (kDropped: decoded, checked, not kept); `kept` places in all, whose
+// sizes and ARs the first walk over the line stream writes, so that the
+// second, over both streams, writes each kept line's events where they go.
+// False unless the bytes hold exactly `lines` records and `events` events.
+constexpr uint32_t kDropped = 0xFFFFFFFFu;
+
+template <typename Place>
+bool decode_into(const unsigned char* data, size_t size, uint64_t lines, uint64_t events, size_t kept,
+                 const Place& place, DecodedChunk& out) {
   out.clear();
-  out.first.reserve(lines + 1);
   size_t pos = 0;
   uint64_t streams;
   if (!get_varint(data, size, pos, streams)) return false;
   const uint64_t line_bytes = streams >> 1;
   const bool steps = streams & 1;
-  if (line_bytes > size - pos) return false;
-  size_t lp = pos;                       // line stream
-  const size_t line_end = pos + line_bytes;
-  size_t ep = line_end;                  // event stream
-  uint64_t previous_first = 0;
+  if (line_bytes > size - pos || events > size - pos - line_bytes) return false;  // an event is a byte or more
+  const size_t line_start = pos, line_end = pos + line_bytes;
+  out.first.assign(kept + 1, 0);
+  out.entry_ar.resize(kept);
+  out.exit_ar.resize(kept);
+  size_t lp = line_start;
+  uint64_t total = 0;
   for (uint64_t i = 0; i < lines; ++i) {
     uint64_t head;
     if (!get_varint(data, line_end, lp, head)) return false;
-    const uint64_t count = head >> 1;
     uint32_t entry = kNoAr, exit = kNoAr;
     if ((head & 1) && (!get_ar(data, line_end, lp, entry) || !get_ar(data, line_end, lp, exit))) return false;
-    if (count > size) return false;
-    out.first.push_back(static_cast<uint32_t>(out.events.size()));
-    out.entry_ar.push_back(entry);
-    out.exit_ar.push_back(exit);
+    const uint64_t count = head >> 1;
+    total += count;
+    if (count > events || total > events) return false;
+    const uint32_t k = place(i);
+    if (k == kDropped) continue;
+    out.first[k + 1] = static_cast<uint32_t>(count);
+    out.entry_ar[k] = entry;
+    out.exit_ar[k] = exit;
+  }
+  if (lp != line_end || total != events) return false;
+  for (size_t k = 0; k < kept; ++k) out.first[k + 1] += out.first[k];
+  // A buffer kept from chunk to chunk grows once, with room for a chunk a
+  // quarter larger, not by a copy into a new block at every larger chunk:
+  // each grew into memory touched for the first time (page faults, most of
+  // a short solve's system time).
+  if (out.events.capacity() < out.first[kept]) out.events.reserve(out.first[kept] + out.first[kept] / 4);
+  out.events.resize(out.first[kept]);
+  lp = line_start;
+  size_t ep = line_end;
+  uint64_t previous_first = 0;
+  for (uint64_t i = 0; i < lines; ++i) {
+    uint64_t head;
+    get_varint(data, line_end, lp, head);  // read and checked above
+    uint32_t ar;
+    if (head & 1) get_ar(data, line_end, lp, ar), get_ar(data, line_end, lp, ar);
+    const uint64_t count = head >> 1;
+    const uint32_t k = place(i);
+    Event* to = k == kDropped ? nullptr : out.events.data() + out.first[k];
     uint32_t previous_id = 0;
-    for (uint64_t k = 0; k < count; ++k) {
+    for (uint64_t j = 0; j < count; ++j) {
       uint64_t code;
       if (!get_varint(data, size, ep, code)) return false;
       int64_t id;
-      if (k == 0) {
+      if (j == 0) {
         code = previous_first + static_cast<uint64_t>(unzigzag(code));  // wraps, never overflows
         previous_first = code;
         id = static_cast<int64_t>(code >> 2);
@@ -155,11 +190,28 @@ bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, Decode
       e.along = code & 1;
       if (e.kind == Event::child_box && (!get_ar(data, size, ep, e.entry_ar) || !get_ar(data, size, ep, e.exit_ar)))
         return false;
-      out.events.push_back(e);
+      if (to) *to++ = e;
     }
   }
-  out.first.push_back(static_cast<uint32_t>(out.events.size()));
-  return lp == line_end && ep == size;
+  return ep == size;
+}
+
+}  // namespace
+
+bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, uint64_t events, DecodedChunk& out) {
+  if (lines > size) return false;  // a line is a byte or more
+  return decode_into(data, size, lines, events, lines, [](uint64_t i) { return static_cast<uint32_t>(i); }, out);
+}
+
+bool decode_chunk_lines(const unsigned char* data, size_t size, uint64_t lines, uint64_t events,
+                        const uint32_t* order, size_t take, std::vector<uint32_t>& place, DecodedChunk& out) {
+  if (lines > size || take > lines) return false;
+  place.assign(lines, kDropped);
+  for (size_t k = 0; k < take; ++k) {
+    if (order[k] >= lines || place[order[k]] != kDropped) return false;  // not an order of the chunk's lines
+    place[order[k]] = static_cast<uint32_t>(k);
+  }
+  return decode_into(data, size, lines, events, take, [&](uint64_t i) { return place[i]; }, out);
 }
 
 }  // namespace mpath::linestore

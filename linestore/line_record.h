@@ -13,16 +13,22 @@ namespace mpath::linestore {
 
 inline constexpr uint32_t kNoAr = 0xFFFFFFFFu;
 
+// 16 bytes (the words first, the flags after them: a pass reads and copies
+// millions of these, and the order the fields were once written in made 20).
 struct Event {
   enum Kind : uint8_t { patch = 0, child_box = 1 };
-  Kind kind = patch;
   uint32_t id = 0;          // patch index, or child index within the box
-  bool along = false;       // patch: its front faces along the line
   uint32_t entry_ar = kNoAr;  // child box: AR where the line enters it
   uint32_t exit_ar = kNoAr;   // and where it leaves
+  Kind kind = patch;
+  bool along = false;       // patch: its front faces along the line
 
+  Event() = default;
+  Event(Kind kind, uint32_t id, bool along, uint32_t entry_ar = kNoAr, uint32_t exit_ar = kNoAr)
+      : id(id), entry_ar(entry_ar), exit_ar(exit_ar), kind(kind), along(along) {}
   bool operator==(const Event&) const = default;
 };
+static_assert(sizeof(Event) == 16);
 
 struct LineRecord {
   uint32_t entry_ar = kNoAr;
@@ -71,7 +77,15 @@ struct DecodedChunk {
 // another in memory instead of jumping about a chunk of megabytes.
 void gather_lines(const DecodedChunk& from, const uint32_t* order, size_t n, DecodedChunk& out);
 
-// Decodes `lines` records from `data`; false if the bytes do not hold exactly that.
-bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, DecodedChunk& out);
+// Decodes `lines` records holding `events` events in all from `data`; false
+// if the bytes do not hold exactly that.
+bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, uint64_t events, DecodedChunk& out);
+
+// Decodes the chunk as decode_chunk does (every record read and checked) and
+// keeps lines order[0 .. take) of it, in that order, as gather_lines would
+// from the whole: a pass's lines without a copy of the chunk. `place`:
+// scratch. False also when `order` names a line twice or none of the chunk's.
+bool decode_chunk_lines(const unsigned char* data, size_t size, uint64_t lines, uint64_t events,
+                        const uint32_t* order, size_t take, std::vector<uint32_t>& place, DecodedChunk& out);
 
 }  // namespace mpath::linestore

@@ -393,13 +393,25 @@ std::vector<bool> BoxStore::faces_crossed(size_t faces) const {
   return out;
 }
 
-void BoxStore::read(int box, uint64_t chunk, linestore::DecodedChunk& out) const {
-  const auto [file, local] = boxes_[box].chunks[chunk];
+linestore::BoxFileReader& BoxStore::reader(int box, uint64_t chunk, uint32_t& local) const {
+  const auto [file, index] = boxes_[box].chunks[chunk];
   Readers& readers = readers_.local();
   if (readers.size() != files_.size()) readers.resize(files_.size());
   auto& reader = readers[file];
   if (!reader) reader = std::make_unique<linestore::BoxFileReader>(files_[file]);
-  reader->read_chunk(local, out);
+  local = index;
+  return *reader;
+}
+
+void BoxStore::read(int box, uint64_t chunk, linestore::DecodedChunk& out) const {
+  uint32_t local;
+  reader(box, chunk, local).read_chunk(local, out);
+}
+
+void BoxStore::read_lines(int box, uint64_t chunk, const uint32_t* order, size_t take,
+                          linestore::DecodedChunk& out) const {
+  uint32_t local;
+  reader(box, chunk, local).read_chunk_lines(local, order, take, out);
 }
 
 }  // namespace mpath

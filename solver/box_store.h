@@ -105,6 +105,9 @@ class BoxStore {
   // Reads a chunk with the calling thread's readers, which stay open from
   // pass to pass (a thread runs one chunk at a time).
   void read(int box, uint64_t chunk, linestore::DecodedChunk& out) const;
+  // Lines order[0 .. take) of the chunk, in that order (a pass's, decoded
+  // straight into its order: linestore::decode_chunk_lines).
+  void read_lines(int box, uint64_t chunk, const uint32_t* order, size_t take, linestore::DecodedChunk& out) const;
   uint64_t chunk_lines(int box, uint64_t chunk) const { return boxes_[box].chunk_lines[chunk]; }
 
  private:
@@ -118,6 +121,8 @@ class BoxStore {
   void open_files(const std::filesystem::path& dir, const std::filesystem::path& manifest_path);
   void derive_box_data(const PatchMesh& mesh, size_t b);
   uint64_t total(uint64_t StoreBox::*field) const;
+  // The calling thread's reader of the file holding the chunk, and the chunk's index in it.
+  linestore::BoxFileReader& reader(int box, uint64_t chunk, uint32_t& local) const;
 
   linestore::Manifest manifest_;
   Hierarchy hierarchy_;

@@ -113,31 +113,31 @@ inline uint64_t part_lines(const std::vector<ChunkPart>& parts, uint64_t lo, uin
 // box's faces, and waiting for each of them in turn was most of its time.
 inline constexpr size_t kLinesAhead = 4;
 
-// One shard's lines of a pass over box b: for each part in [lo, hi) its
-// chunk is read and checked (`check(chunk, c)`, which throws on a damaged
-// one), then the part's lines are taken in the pass's random order
-// (chunk_line_order; an adaptive pass takes the first of them, a random
-// subset of the chunk), gathered in that order (gather_lines) and run:
-// `line(lines, k)` for k = 0, 1, ..., after `ahead(lines, k + d, d)` for
-// the lines d = 1 .. kLinesAhead places after it. (Taking the chunk's first
-// lines instead, and decoding only them, raised the furnace error at rho
-// 0.99 by a fifth: every thin pass then met the same lines.)
+// One shard's lines of a pass over box b: for each part in [lo, hi) the
+// part's lines are taken in the pass's random order (chunk_line_order; an
+// adaptive pass takes the first of them, a random subset of the chunk), its
+// chunk read and decoded straight into that order (BoxStore::read_lines:
+// a pass then reads its lines' events one after another in memory) and
+// checked (`check(lines, c)`, which throws on a damaged one), and the lines
+// run: `line(lines, k)` for k = 0, 1, ..., after `ahead(lines, k + d, d)`
+// for the lines d = 1 .. kLinesAhead places after it. (Taking the chunk's
+// first lines instead, and decoding only them, raised the furnace error at
+// rho 0.99 by a fifth: every thin pass then met the same lines.)
 template <typename Check, typename Line, typename Ahead>
 void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart>& parts, uint64_t lo, uint64_t hi,
                        unsigned pass, Progress& progress, const Check& check, const Line& line, const Ahead& ahead) {
-  // One decoded chunk, order and gathered lines per thread, kept from pass
-  // to pass: a chunk's buffers are megabytes, and allocating them afresh for
-  // every box of every pass cost page faults.
-  thread_local linestore::DecodedChunk chunk, lines;
+  // The lines and order per thread, kept from pass to pass: their buffers
+  // are megabytes, and allocating them afresh for every box of every pass
+  // cost page faults.
+  thread_local linestore::DecodedChunk lines;
   thread_local std::vector<uint32_t> order;
   for (uint64_t i = lo; i < hi; ++i) {
     const uint64_t c = parts[i].chunk;
-    store.read(b, c, chunk);
-    check(chunk, c);
-    const size_t n = chunk.lines();
+    const size_t n = store.chunk_lines(b, c);
     const size_t take = std::min<size_t>(n, parts[i].lines);
     chunk_line_order(pass, b, c, n, order);
-    linestore::gather_lines(chunk, order.data(), take, lines);
+    store.read_lines(b, c, order.data(), take, lines);
+    check(lines, c);
     for (size_t k = 0; k < take; ++k) {
       for (size_t d = kLinesAhead; d >= 1; --d)
         if (k + d < take) ahead(lines, static_cast<uint32_t>(k + d), d);

@@ -119,8 +119,8 @@ TEST(LineStore, RoundTripsRandomLineRecords) {
 // patches numbered together are stored as steps; a step that leads below 0
 // or above the largest id is refused, not wrapped.
 TEST(LineStore, IdStepsRoundTripAtTheEndsOfTheRangeAndRefuseLeavingIt) {
-  const auto decode = [](const std::string& raw, uint64_t lines, DecodedChunk& out) {
-    return decode_chunk(reinterpret_cast<const unsigned char*>(raw.data()), raw.size(), lines, out);
+  const auto decode = [](const std::string& raw, uint64_t lines, uint64_t events, DecodedChunk& out) {
+    return decode_chunk(reinterpret_cast<const unsigned char*>(raw.data()), raw.size(), lines, events, out);
   };
   const uint32_t top = 0xFFFFFFFFu;
   LineRecord line;
@@ -132,7 +132,7 @@ TEST(LineStore, IdStepsRoundTripAtTheEndsOfTheRangeAndRefuseLeavingIt) {
   encoder.add(line);
   encoder.add(child);
   DecodedChunk chunk;
-  ASSERT_TRUE(decode(encoder.finish(), 2, chunk));
+  ASSERT_TRUE(decode(encoder.finish(), 2, 2 * line.events.size(), chunk));
   EXPECT_EQ(records(chunk), (std::vector<LineRecord>{line, child}));
 
   // Lines of 2-6 crossings of neighbouring patches among a million.
@@ -147,7 +147,7 @@ TEST(LineStore, IdStepsRoundTripAtTheEndsOfTheRangeAndRefuseLeavingIt) {
   }
   const std::string raw = run_encoder.finish();
   EXPECT_EQ(raw[0] & 1, 1) << "stored as steps";
-  ASSERT_TRUE(decode(raw, runs.size(), chunk));
+  ASSERT_TRUE(decode(raw, runs.size(), run_encoder.events(), chunk));
   EXPECT_EQ(records(chunk), runs);
 
   // One line of two events: id 3, then as a step -3 (zigzag 5: id 0, read),
@@ -159,7 +159,7 @@ TEST(LineStore, IdStepsRoundTripAtTheEndsOfTheRangeAndRefuseLeavingIt) {
       put_varint(one, 2 << 1);                    // two events, no ARs
       put_varint(one, 2 * (3 << 2));              // first event: id 3, zigzag from 0
       put_varint(one, second << 2);
-      const bool read = decode(one, 1, chunk);
+      const bool read = decode(one, 1, 2, chunk);
       EXPECT_EQ(read, steps ? second == 5 : second <= top) << "steps " << steps << ", second " << second;
       if (read) {
         EXPECT_EQ(chunk.events[1].id, steps ? 0u : second);
@@ -186,6 +186,53 @@ TEST(LineStore, GatheringLinesKeepsEachLineWhole) {
     ASSERT_EQ(gathered.lines(), take);
     const auto lines = records(gathered);
     for (size_t k = 0; k < take; ++k) EXPECT_EQ(lines[k], written[0][order[k]]) << "line " << k;
+  }
+}
+
+// A pass decodes a chunk straight into its own order (decode_chunk_lines):
+// for random chunks (several seeds, lines with and without ARs, child-box
+// events), random orders and parts, the lines kept are exactly what
+// decoding the whole and gathering in that order gives, one buffer serving
+// chunk after chunk of other sizes; an order naming a line twice or a line
+// the chunk does not have, or the wrong event count, is refused; and every
+// cut of the bytes is refused by both decoders alike.
+TEST(LineStore, DecodingIntoPassOrderEqualsDecodingAndGathering) {
+  DecodedChunk whole, gathered, direct;
+  std::vector<uint32_t> place;
+  for (const unsigned seed : {1u, 2u, 3u, 4u, 5u}) {
+    std::mt19937 rng(seed);
+    const auto lines = random_lines(std::uniform_int_distribution<size_t>(1, 3000)(rng), rng);
+    std::vector<uint32_t> identity(lines.size());
+    std::iota(identity.begin(), identity.end(), 0u);
+    uint64_t events = 0;
+    const std::string raw = encode_lines(flat(lines), identity.data(), events);
+    const auto* data = reinterpret_cast<const unsigned char*>(raw.data());
+    ASSERT_TRUE(decode_chunk(data, raw.size(), lines.size(), events, whole));
+    ASSERT_EQ(records(whole), lines);
+    for (int trial = 0; trial < 6; ++trial) {
+      std::vector<uint32_t> order = identity;
+      std::shuffle(order.begin(), order.end(), rng);
+      const size_t take = trial == 0 ? lines.size() : trial == 1 ? 0 : std::uniform_int_distribution<size_t>(1, lines.size())(rng);
+      gather_lines(whole, order.data(), take, gathered);
+      ASSERT_TRUE(decode_chunk_lines(data, raw.size(), lines.size(), events, order.data(), take, place, direct));
+      EXPECT_EQ(records(direct), records(gathered)) << "seed " << seed << ", " << take << " lines";
+      EXPECT_EQ(direct.first, gathered.first);
+    }
+    std::vector<uint32_t> order = identity;
+    if (lines.size() > 1) {
+      order[1] = order[0];
+      EXPECT_FALSE(decode_chunk_lines(data, raw.size(), lines.size(), events, order.data(), 2, place, direct));
+    }
+    order[0] = static_cast<uint32_t>(lines.size());
+    EXPECT_FALSE(decode_chunk_lines(data, raw.size(), lines.size(), events, order.data(), 1, place, direct));
+    EXPECT_FALSE(decode_chunk_lines(data, raw.size(), lines.size(), events + 1, identity.data(), 1, place, direct));
+    EXPECT_FALSE(decode_chunk(data, raw.size(), lines.size(), events + 1, whole));
+    if (events > 0) EXPECT_FALSE(decode_chunk(data, raw.size(), lines.size(), events - 1, whole));
+    for (size_t cut = 0; cut < raw.size(); cut += 1 + raw.size() / 97) {
+      EXPECT_FALSE(decode_chunk(data, cut, lines.size(), events, whole)) << "cut at " << cut;
+      EXPECT_FALSE(decode_chunk_lines(data, cut, lines.size(), events, identity.data(), lines.size(), place, direct))
+          << "cut at " << cut;
+    }
   }
 }
 
