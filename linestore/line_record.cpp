@@ -112,35 +112,55 @@ bool get_ar(const unsigned char* data, size_t size, size_t& pos, uint32_t& ar) {
 
 namespace {
 
-// Decodes a chunk of `lines` records, line i going to place place(i) of
-// `out` (kDropped: decoded, checked, not kept); `kept` places in all, whose
-// sizes and ARs the first walk over the line stream writes, so that the
-// second, over both streams, writes each kept line's events where they go.
-// False unless the bytes hold exactly `lines` records and `events` events.
+// A chunk's streams: the line stream [line_start, line_end), the event
+// stream [line_end, size), and whether later events' ids are steps.
+struct Streams {
+  size_t line_start = 0, line_end = 0;
+  bool steps = false;
+};
+
+bool open_streams(const unsigned char* data, size_t size, uint64_t events, Streams& s) {
+  size_t pos = 0;
+  uint64_t head;
+  if (!get_varint(data, size, pos, head)) return false;
+  const uint64_t line_bytes = head >> 1;
+  // An event is a byte or more; offsets into a chunk's events are 32-bit.
+  if (line_bytes > size - pos || events > size - pos - line_bytes || events >= kNoAr) return false;
+  s = {pos, pos + line_bytes, (head & 1) != 0};
+  return true;
+}
+
+// A line's head in the line stream: its event count and wall ARs.
+[[gnu::always_inline]] inline bool get_head(const unsigned char* data, size_t line_end, size_t& lp, uint64_t& count, uint32_t& entry,
+              uint32_t& exit) {
+  uint64_t head;
+  if (!get_varint(data, line_end, lp, head)) return false;
+  entry = exit = kNoAr;
+  if ((head & 1) && (!get_ar(data, line_end, lp, entry) || !get_ar(data, line_end, lp, exit))) return false;
+  count = head >> 1;
+  return true;
+}
+
+// The first walk, over the line stream: line i's size and ARs go to place
+// place(i) of `out` (kDropped: checked, not kept); then out.first is made
+// from the sizes. False unless the stream holds `lines` heads and `events`
+// events in all.
 constexpr uint32_t kDropped = 0xFFFFFFFFu;
 
 template <typename Place>
-bool decode_into(const unsigned char* data, size_t size, uint64_t lines, uint64_t events, size_t kept,
-                 const Place& place, DecodedChunk& out) {
-  out.clear();
-  size_t pos = 0;
-  uint64_t streams;
-  if (!get_varint(data, size, pos, streams)) return false;
-  const uint64_t line_bytes = streams >> 1;
-  const bool steps = streams & 1;
-  if (line_bytes > size - pos || events > size - pos - line_bytes) return false;  // an event is a byte or more
-  const size_t line_start = pos, line_end = pos + line_bytes;
-  out.first.assign(kept + 1, 0);
+bool walk_lines(const unsigned char* data, const Streams& s, uint64_t lines, uint64_t events, size_t kept,
+                const Place& place, DecodedChunk& out) {
+  // Sized, not cleared: every place is written below, and a buffer kept from
+  // chunk to chunk of about the same size then constructs nothing again.
+  out.first.resize(kept + 1);
   out.entry_ar.resize(kept);
   out.exit_ar.resize(kept);
-  size_t lp = line_start;
+  size_t lp = s.line_start;
   uint64_t total = 0;
   for (uint64_t i = 0; i < lines; ++i) {
-    uint64_t head;
-    if (!get_varint(data, line_end, lp, head)) return false;
-    uint32_t entry = kNoAr, exit = kNoAr;
-    if ((head & 1) && (!get_ar(data, line_end, lp, entry) || !get_ar(data, line_end, lp, exit))) return false;
-    const uint64_t count = head >> 1;
+    uint64_t count;
+    uint32_t entry, exit;
+    if (!get_head(data, s.line_end, lp, count, entry, exit)) return false;
     total += count;
     if (count > events || total > events) return false;
     const uint32_t k = place(i);
@@ -149,25 +169,35 @@ bool decode_into(const unsigned char* data, size_t size, uint64_t lines, uint64_
     out.entry_ar[k] = entry;
     out.exit_ar[k] = exit;
   }
-  if (lp != line_end || total != events) return false;
+  if (lp != s.line_end || total != events) return false;
+  out.first[0] = 0;
   for (size_t k = 0; k < kept; ++k) out.first[k + 1] += out.first[k];
   // A buffer kept from chunk to chunk grows once, with room for a chunk a
-  // quarter larger, not by a copy into a new block at every larger chunk:
-  // each grew into memory touched for the first time (page faults, most of
-  // a short solve's system time).
-  if (out.events.capacity() < out.first[kept]) out.events.reserve(out.first[kept] + out.first[kept] / 4);
-  out.events.resize(out.first[kept]);
-  lp = line_start;
-  size_t ep = line_end;
+  // quarter larger, and without copying what it held: each growth touched
+  // memory for the first time (page faults, most of a short solve's system
+  // time).
+  const uint32_t n = out.first[kept];
+  if (out.events.capacity() < n) {
+    out.events.clear();
+    out.events.reserve(n + n / 4);
+  }
+  out.events.resize(n);
+  return true;
+}
+
+// The second walk, over both streams: line i's events are decoded and
+// checked, and written from out.events[at(i)] on (at(i) = kDropped: not kept).
+template <typename At>
+bool walk_events(const unsigned char* data, size_t size, const Streams& s, uint64_t lines, const At& at,
+                 DecodedChunk& out) {
+  size_t lp = s.line_start, ep = s.line_end;
   uint64_t previous_first = 0;
   for (uint64_t i = 0; i < lines; ++i) {
-    uint64_t head;
-    get_varint(data, line_end, lp, head);  // read and checked above
-    uint32_t ar;
-    if (head & 1) get_ar(data, line_end, lp, ar), get_ar(data, line_end, lp, ar);
-    const uint64_t count = head >> 1;
-    const uint32_t k = place(i);
-    Event* to = k == kDropped ? nullptr : out.events.data() + out.first[k];
+    uint64_t count;
+    uint32_t entry, exit;
+    get_head(data, s.line_end, lp, count, entry, exit);  // read and checked by walk_lines
+    const uint32_t where = at(i);
+    Event* to = where == kDropped ? nullptr : out.events.data() + where;
     uint32_t previous_id = 0;
     for (uint64_t j = 0; j < count; ++j) {
       uint64_t code;
@@ -177,7 +207,7 @@ bool decode_into(const unsigned char* data, size_t size, uint64_t lines, uint64_
         code = previous_first + static_cast<uint64_t>(unzigzag(code));  // wraps, never overflows
         previous_first = code;
         id = static_cast<int64_t>(code >> 2);
-      } else if (steps) {
+      } else if (s.steps) {
         id = static_cast<int64_t>(previous_id) + unzigzag(code >> 2);
       } else {
         id = static_cast<int64_t>(code >> 2);
@@ -199,19 +229,27 @@ bool decode_into(const unsigned char* data, size_t size, uint64_t lines, uint64_
 }  // namespace
 
 bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, uint64_t events, DecodedChunk& out) {
-  if (lines > size) return false;  // a line is a byte or more
-  return decode_into(data, size, lines, events, lines, [](uint64_t i) { return static_cast<uint32_t>(i); }, out);
+  Streams s;
+  if (lines > size || !open_streams(data, size, events, s)) return false;  // a line is a byte or more
+  const auto same = [](uint64_t i) { return static_cast<uint32_t>(i); };
+  return walk_lines(data, s, lines, events, lines, same, out) &&
+         walk_events(data, size, s, lines, [&](uint64_t i) { return out.first[i]; }, out);
 }
 
 bool decode_chunk_lines(const unsigned char* data, size_t size, uint64_t lines, uint64_t events,
                         const uint32_t* order, size_t take, std::vector<uint32_t>& place, DecodedChunk& out) {
-  if (lines > size || take > lines) return false;
+  Streams s;
+  if (lines > size || take > lines || !open_streams(data, size, events, s)) return false;
   place.assign(lines, kDropped);
   for (size_t k = 0; k < take; ++k) {
     if (order[k] >= lines || place[order[k]] != kDropped) return false;  // not an order of the chunk's lines
     place[order[k]] = static_cast<uint32_t>(k);
   }
-  return decode_into(data, size, lines, events, take, [&](uint64_t i) { return place[i]; }, out);
+  if (!walk_lines(data, s, lines, events, take, [&](uint64_t i) { return place[i]; }, out)) return false;
+  // Each kept line's place becomes where its events go, so that the second
+  // walk reads it in line order instead of looking it up at random.
+  for (size_t k = 0; k < take; ++k) place[order[k]] = out.first[k];
+  return walk_events(data, size, s, lines, [&](uint64_t i) { return place[i]; }, out);
 }
 
 }  // namespace mpath::linestore
