@@ -1,8 +1,10 @@
 // mpath-preprocess: meshes the scene and writes the line store for mpath-solve.
 #include "preprocess.h"
+#include "process_memory.h"
 #include "program.h"
 
 int main(int argc, char** argv) {
+  mpath::use_huge_pages(argv);  // first: it may run the program again in place
   CLI::App app{"mpath-preprocess: traces and stores the global lines of a scene", "mpath-preprocess"};
   mpath::ProgramFlags flags;
   std::string shard = "1/1";

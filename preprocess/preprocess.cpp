@@ -312,7 +312,9 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
                                  {"trace_seconds", stats.trace_seconds}, {"encode_seconds", stats.encode_seconds},
                                  {"compress_seconds", stats.compress_seconds}, {"write_seconds", stats.write_seconds},
                                  {"wall_seconds", stats.wall_seconds}, {"threads", threads},
-                                 {"peak_rss_bytes", peak_rss_bytes()}, {"boxes", per_box}};
+                                 {"peak_rss_bytes", peak_rss_bytes()},
+                                 {"transparent_huge_pages", transparent_huge_pages()},
+                                 {"malloc_huge_pages", malloc_asks_for_huge_pages()}, {"boxes", per_box}};
   write_text_file(dir / (shard.count == 1 ? std::string("preprocess.json")
                                           : fmt::format("preprocess.part{:04}of{:04}.json", shard.index, shard.count)),
                   json_text(timings));

@@ -1,8 +1,10 @@
 // mpath-compare: error of a radiosity solution against a reference solution.
 #include "compare.h"
+#include "process_memory.h"
 #include "program.h"
 
 int main(int argc, char** argv) {
+  mpath::use_huge_pages(argv);  // first: it may run the program again in place
   CLI::App app{"mpath-compare: error of a solution against a reference on the same mesh, with error images", "mpath-compare"};
   mpath::ProgramFlags flags;
   mpath::CompareFlags compare;

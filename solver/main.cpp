@@ -1,5 +1,6 @@
 // mpath-solve: solves the radiosity of a scene described by a TOML config.
 // Under mpirun or srun, the ranks share every pass (ranks.h).
+#include "process_memory.h"
 #include "program.h"
 #include "ranks.h"
 #include "solve.h"
@@ -28,6 +29,7 @@ int solve_main(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  mpath::use_huge_pages(argv);        // first: it may run the program again in place
   mpath::Ranks::start(&argc, &argv);  // MPI, when mpirun or srun started this process
   const int status = solve_main(argc, argv);
   mpath::Ranks::finish(status);

@@ -103,7 +103,9 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
   const PatchMesh& m = prepared.mesh;
   return {
       {"mpath", {{"version", MPATH_VERSION}, {"commit", MPATH_GIT_COMMIT}, {"embree", Tracer::embree_version()},
-                 {"command", r.command_line}, {"threads", r.threads}, {"ranks", r.ranks}}},
+                 {"command", r.command_line}, {"threads", r.threads}, {"ranks", r.ranks},
+                 {"transparent_huge_pages", transparent_huge_pages()},
+                 {"malloc_huge_pages", malloc_asks_for_huge_pages()}}},
       {"config", json::parse(options_to_json(options))},
       {"scene", {{"file", options.scene.file.string()}, {"polygons", prepared.scene.polygons.size()},
                  {"objects", prepared.scene.objects.size()}, {"materials", prepared.scene.materials.size()},

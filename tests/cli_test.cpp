@@ -2,7 +2,11 @@
 // user can meet from bad input, each with exit status 1.
 #include <gtest/gtest.h>
 
+#include <gnu/libc-version.h>
 #include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <fstream>
 
 #include "mpath_version.h"
 #include "test_util.h"
@@ -73,6 +77,44 @@ TEST(Cli, AnUnconvergedRunWarnsInItsReport) {
     warned |= w.get<std::string>().find("not converged: stopped at solver.iterations = 1") != std::string::npos &&
               w.get<std::string>().find("--resume") != std::string::npos;
   EXPECT_TRUE(warned) << report["warnings"].dump();
+}
+
+// Where the kernel gives transparent huge pages to memory that asks
+// ("madvise") and glibc can ask (2.35 and later), mpath-solve runs itself
+// again with GLIBC_TUNABLES=glibc.malloc.hugetlb=1 and its report says so;
+// MPATH_HUGE_PAGES=0 or a hugetlb tunable of the user's own leaves it as it
+// is, another tunable of the user's does not stop it. The answer is the same
+// byte for byte.
+TEST(Cli, AsksForHugePagesWhereTheKernelGivesThemOnRequest) {
+  std::string mode;
+  {
+    std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string line;
+    std::getline(in, line);
+    if (line.find('[') != std::string::npos)
+      mode = line.substr(line.find('[') + 1, line.find(']') - line.find('[') - 1);
+  }
+  int major = 0, minor = 0;
+  std::sscanf(gnu_get_libc_version(), "%d.%d", &major, &minor);
+  const bool can = mode == "madvise" && (major > 2 || (major == 2 && minor >= 35));
+  std::string first_ply;
+  for (const auto& [env, asks] : std::vector<std::pair<std::string, bool>>{
+           {"env -u GLIBC_TUNABLES -u MPATH_HUGE_PAGES", can},
+           {"env -u GLIBC_TUNABLES MPATH_HUGE_PAGES=0", false},
+           {"env -u MPATH_HUGE_PAGES GLIBC_TUNABLES=glibc.malloc.hugetlb=0", false},
+           {"env -u MPATH_HUGE_PAGES GLIBC_TUNABLES=glibc.malloc.trim_threshold=1073741824", can}}) {
+    TempDir dir;
+    const RunResult r = test::run(env + " " + test::solve_bin() + " " + kCornell +
+                                  " -q lines.total=20000 first_shot.lines=10000 output.exr=false output.png=false "
+                                  "output.dir=" + dir.path().string());
+    ASSERT_EQ(r.exit_code, 0) << env << "\n" << r.output;
+    const auto report = nlohmann::json::parse(test::read_file(dir / "report.json"));
+    EXPECT_EQ(report["mpath"]["transparent_huge_pages"], mode);
+    EXPECT_EQ(report["mpath"]["malloc_huge_pages"].get<bool>(), asks) << env;
+    const std::string ply = test::read_file(dir / "solution.ply");
+    if (first_ply.empty()) first_ply = ply;
+    EXPECT_TRUE(ply == first_ply) << env << ": another answer";
+  }
 }
 
 TEST(Cli, PrintsTheEffectiveConfigWithOverrides) {
