@@ -131,8 +131,8 @@ bool open_streams(const unsigned char* data, size_t size, uint64_t events, Strea
 }
 
 // A line's head in the line stream: its event count and wall ARs.
-[[gnu::always_inline]] inline bool get_head(const unsigned char* data, size_t line_end, size_t& lp, uint64_t& count, uint32_t& entry,
-              uint32_t& exit) {
+[[gnu::always_inline]] inline bool get_head(const unsigned char* data, size_t line_end, size_t& lp, uint64_t& count,
+                                            uint32_t& entry, uint32_t& exit) {
   uint64_t head;
   if (!get_varint(data, line_end, lp, head)) return false;
   entry = exit = kNoAr;

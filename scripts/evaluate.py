@@ -759,7 +759,7 @@ from this run's CSVs; what follows explains them, from the profiles in
   scene is open.
 - **What limits it.** The solve is bound by the transport loop (random
   access to face records, the class of each crossing) and chunk decoding,
-  and a store is read once more when opened (the line sets' counts); the
+  and a store's files are read and hashed once when it is opened; the
   first run by the preprocessor's own work per line beyond Embree (line
   generation, sorting a chunk's lines for compression, encoding, zstd).
   The pilot budget (the default) keeps small bright parts (a table lamp)
