@@ -68,10 +68,18 @@ def log(msg):
 
 
 def run(cmd):
-    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    if r.returncode != 0:
-        sys.exit("evaluate: failed (exit %d): %s\n%s" % (r.returncode, " ".join(cmd), r.stdout[-3000:]))
-    return r.stdout
+    """Runs a program; its output, and the process's wall and CPU seconds
+    (user + system, every thread), start-up included."""
+    t0 = time.monotonic()
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    out = p.stdout.read()
+    _, status, usage = os.wait4(p.pid, 0)
+    wall = time.monotonic() - t0
+    p.stdout.close()
+    p.returncode = os.waitstatus_to_exitcode(status)
+    if p.returncode != 0:
+        sys.exit("evaluate: failed (exit %d): %s\n%s" % (p.returncode, " ".join(cmd), out[-3000:]))
+    return out, wall, usage.ru_utime + usage.ru_stime
 
 
 class Scene:
@@ -99,23 +107,24 @@ class Scene:
         """One run; returns its row of phase times and sizes."""
         keys, out, store = self.settings(method, lines, seed, tag, extra)
         row = {"scene": self.name, "method": method, "lines": lines, "seed": seed, "preprocess_s": 0.0,
-               "preprocess_rss_mb": 0.0, "store_mb": 0.0}
+               "preprocess_cpu_s": 0.0, "preprocess_rss_mb": 0.0, "store_mb": 0.0}
         if method != "classic":
             shutil.rmtree(store, ignore_errors=True)
-            run([os.path.join(BIN, "mpath-preprocess"), self.config, "-q"] + keys)
+            _, wall, cpu = run([os.path.join(BIN, "mpath-preprocess"), self.config, "-q"] + keys)
             pre = json.load(open(os.path.join(store, "preprocess.json")))
-            row.update(preprocess_s=pre["wall_seconds"], store_mb=pre["bytes"] / 1e6,
+            row.update(preprocess_s=wall, preprocess_cpu_s=cpu, store_mb=pre["bytes"] / 1e6,
                        preprocess_rss_mb=pre.get("peak_rss_bytes", 0) / 2**20,
                        preprocess_trace_s=pre.get("trace_seconds", 0.0), preprocess_hierarchy_s=pre.get("hierarchy_seconds", 0.0),
                        preprocess_pilot_s=pre.get("pilot_seconds", 0.0),
                        preprocess_first_shot_s=pre.get("first_shot_seconds", 0.0))
-        run([os.path.join(BIN, "mpath-solve"), self.config, "-q"] + keys)
+        _, wall, cpu = run([os.path.join(BIN, "mpath-solve"), self.config, "-q"] + keys)
         rep = json.load(open(os.path.join(out, "report.json")))
         t = rep["timings"]
         h = rep.get("hierarchy") or {}
-        row.update(solve_s=t["total"], store_open_s=t.get("store", 0.0), first_shot_s=t["first_shot"],
+        row.update(solve_s=wall, solve_cpu_s=cpu, store_open_s=t.get("store", 0.0), first_shot_s=t["first_shot"],
                    iterations_s=t["iterations"], iterations=rep["iterations"]["count"],
-                   converged=rep["iterations"]["converged"], total_s=row["preprocess_s"] + t["total"],
+                   converged=rep["iterations"]["converged"], total_s=row["preprocess_s"] + wall,
+                   total_cpu_s=row["preprocess_cpu_s"] + cpu,
                    boxes=h.get("count", 1), ars=h.get("ars", 0), ar_memory_mb=h.get("ar_memory_bytes", 0) / 1e6,
                    solve_rss_mb=rep["memory"]["peak_rss_bytes"] / 2**20, patches=rep["scene"]["patches"],
                    faces=rep["scene"]["faces"], polygons=rep["scene"]["polygons"],
@@ -273,23 +282,24 @@ def time_at_error(curve, e):
     return ("=", pts[-1][2])
 
 
-def speedups(rows, err_h, err_c, method="hierarchical"):
+def speedups(rows, err_h, err_c, method="hierarchical", solve_key="solve_s", total_key="total_s"):
     """Per rung of `method` (hierarchical or quotient): mean error and times,
     classic's time at that error, speed-ups (solve alone, preprocess + solve)
-    and their range over seeds."""
+    and their range over seeds; times are wall seconds, or CPU seconds with
+    the keys solve_cpu_s and total_cpu_s."""
     out = []
-    classic = mean_curve(rows, "classic", err_c, "solve_s")
-    for lines, e, solve in mean_curve(rows, method, err_h, "solve_s"):
-        total = statistics.fmean(r["total_s"] for r in rows if r["method"] == method and r["lines"] == lines)
+    classic = mean_curve(rows, "classic", err_c, solve_key)
+    for lines, e, solve in mean_curve(rows, method, err_h, solve_key):
+        total = statistics.fmean(r[total_key] for r in rows if r["method"] == method and r["lines"] == lines)
         ct = time_at_error(classic, e)
         per_seed = []
         for seed in sorted({r["seed"] for r in rows}):
-            cs = [(r["lines"], r[err_c], r["solve_s"]) for r in rows if r["method"] == "classic" and r["seed"] == seed]
+            cs = [(r["lines"], r[err_c], r[solve_key]) for r in rows if r["method"] == "classic" and r["seed"] == seed]
             hs = [r for r in rows if r["method"] == method and r["seed"] == seed and r["lines"] == lines]
             if hs and cs:
                 t = time_at_error(cs, hs[0][err_h])
                 if t and t[0] == "=":
-                    per_seed.append((t[1] / hs[0]["solve_s"], t[1] / hs[0]["total_s"]))
+                    per_seed.append((t[1] / hs[0][solve_key], t[1] / hs[0][total_key]))
         out.append({"method": method, "lines": lines, "error": e, "solve_s": solve, "total_s": total,
                      "classic_bound": ct[0], "classic_s": ct[1], "speedup_solve": ct[1] / solve,
                      "speedup_total": ct[1] / total,
@@ -456,10 +466,12 @@ def document(args, runs, speed, memory, bias, figures, meta):
       " global lines every pass, Embree), and `mpath-preprocess` + `mpath-solve` with `solver.method ="
       " \"hierarchical\"` (locally global lines per subscene, stored on disk and streamed). The config is the"
       " scene's own in `configs/` (defaults otherwise: first shot, tolerance, adaptive lines). Times are wall"
-      " seconds from `report.json` / `preprocess.json`: *solve* is the whole `mpath-solve` run (scene, mesh,"
-      " store, first shot, iterations and solution.ply; camera images and illuminance grids are off in every run,"
-      " since they cost the same whatever the method and the lines), which is what a rerun on a kept store costs;"
-      " *first run* adds"
+      " seconds of the processes as this driver measures them, start-up included (loading the libraries and, where"
+      " the kernel gives huge pages on request, the program's exec of itself: docs/user-guide.md, about 0.03 s"
+      " in all), and the CPU seconds (user + system, every thread) beside them: *solve* is the whole `mpath-solve`"
+      " run (scene, mesh, store, first shot, iterations and solution.ply; camera images and illuminance grids are"
+      " off in every run, since they cost the same whatever the method and the lines), which is what a rerun on a"
+      " kept store costs; *first run* adds"
       " `mpath-preprocess`. The hierarchical runs use the default budget, `lines.box_budget = \"pilot\"` (a pilot"
       " sets each box's lines and a lamp's small group gets a box of its own; docs/algorithm.md); on ROOM, BIG ROOM"
       " and OFFICE they are made a second time with the paper's budget, `lines.box_budget = \"quotient\"`, in a"
@@ -686,6 +698,10 @@ def verdicts(speed, scenes):
         if med:
             text += " At equal median per-patch error: median %.2fx (solve), %.2fx (first run)." % (
                 m(med, "speedup_solve"), m(med, "speedup_total"))
+        cpu = [s for s in speed if s["scene"] == name and s["reference"] == "classic-cpu"]
+        if cpu:
+            text += " In CPU seconds (user + system, every thread) at equal relative RMS error: median %.2fx" \
+                    " (solve), %.2fx (first run)." % (m(cpu, "speedup_solve"), m(cpu, "speedup_total"))
         if name in TARGETS:
             t_total, t_solve = TARGETS[name]
             solve, total = m(sp, "speedup_solve"), m(sp, "speedup_total")
@@ -863,6 +879,11 @@ def main():
             for method in ("hierarchical", "quotient"):
                 for s in speedups(rs, err_h, err_c, method):
                     speed.append(dict(scene=scene["name"], reference=reference, **s))
+        # The same at equal relative RMS error (b), in CPU seconds.
+        if all("solve_cpu_s" in r for r in rs):
+            for s in speedups(rs, "rel_rms_classic_ref", "rel_rms_classic_ref", "hierarchical", "solve_cpu_s",
+                              "total_cpu_s"):
+                speed.append(dict(scene=scene["name"], reference="classic-cpu", **s))
     write_csv(os.path.join(bench, "results_speedup.csv"), speed)
     memory = []
     for scene in meta["scenes"]:
