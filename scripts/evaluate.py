@@ -784,29 +784,29 @@ from this run's CSVs; what follows explains them, from the profiles in
   materials (`lines.box_budget = "quotient"` where design variants on a
   kept store must match fresh stores bit for bit; docs/user-guide.md).
   What is left for the first run is a cheaper preprocessor.
-- **Where a target is not met** (first runs on BIG ROOM and office2, the
-  kept-store solve on office2). A first run spends about four fifths of
-  its time preprocessing, the first shot it traces for the store included
-  (the table above); the preprocess's profile
-  (BIG ROOM, docs/performance.md) is Embree's tracing 40 %, zstd 12 %,
-  line generation 8 %, encoding 6 %, the class counts 4.5 %: per line
-  about what a classic pass costs, so a first run's speed-up at equal
-  error is roughly one over the square of the error ratio at equal lines,
-  less what a first run costs beyond a classic solve of the same lines.
-  That ratio is 0.58-0.65 on OFFICE, 0.66-0.77 on ROOM and BIG ROOM, and
-  1.01-1.10 on office2, where the pilot gives the root every line (its ceiling strips
-  light the whole room; no subscene holds more of the error than its
-  lines would buy: "pilot budget: 100.0 % of the lines in the root") and
-  the store is a stored Multipath store; BIG ROOM's pilot keeps 89 % in
-  the root. A kept-store solve reads its first shot from the store
-  (`first_shot.bin`, traced once by `mpath-preprocess`; tracing it was
-  41-45 % of the hierarchical solve on ROOM, BIG ROOM and office2 before
-  it was kept, and the kept-store medians rose from 5.0x, 4.2x, 7.1x and
-  3.1x to the figures above), so it is the transport loop over the stored
-  lines and little else. On office2 that loop is stored Multipath's (one
-  box), whose passes cost what classic's cost less the tracing: 4.5x, not
-  5x. A first run pays the first shot in the preprocess instead of the
-  solve, and a little more (a BVH of its own and the file, 0.01-0.04 s).
+- **Where a target is not met** (first runs on BIG ROOM and office2).
+  A first run spends about four fifths of its time preprocessing, the
+  first shot it traces for the store included (the table above); the
+  preprocess's profile (BIG ROOM, docs/performance.md) is Embree's tracing
+  40 %, zstd 12 %, line generation 8 %, encoding 6 %, the class counts
+  4.5 %: per line about what a classic pass costs, so a first run's
+  speed-up at equal error is roughly one over the square of the error ratio
+  at equal lines, less what a first run costs beyond a classic solve of the
+  same lines. That ratio is 0.58-0.64 on OFFICE, 0.67-0.77 on ROOM and BIG
+  ROOM, and 1.01-1.09 on office2, where the pilot gives the root every line
+  (its ceiling strips light the whole room; no subscene holds more of the
+  error than its lines would buy: "pilot budget: 100.0 % of the lines in
+  the root") and the store is a stored Multipath store; BIG ROOM's pilot
+  keeps 89 % in the root. A kept-store solve reads its first shot from the
+  store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is the
+  transport loop over the stored lines and little else; on office2 that
+  loop is stored Multipath's (one box), and its kept-store solve reaches 5x
+  since the passes decode each chunk straight into their order and the
+  programs ask for huge pages (docs/performance.md: office2's kept-store
+  solve 0.286 -> 0.252 s from the huge pages alone, its page faults
+  halved). These times include each program's start-up (about 0.03 s with
+  the exec that asks for huge pages): at 1M lines that is a sixth of
+  office2's kept-store solve.
 """
 
 
