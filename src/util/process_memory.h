@@ -18,9 +18,10 @@ void keep_freed_memory();
 
 // Called first thing in main (before MPI or any thread starts): where the
 // kernel gives transparent huge pages only to memory that asks for them
-// ("madvise", Debian's default) and glibc can ask (2.35 and later), runs the
-// program again in place (same process id, arguments and environment) with
-// GLIBC_TUNABLES=glibc.malloc.hugetlb=1 added, so that the allocator asks.
+// ("madvise", as on the machines measured) and glibc can ask (2.35 and
+// later), runs the program again in place (same process id, arguments and
+// environment) with GLIBC_TUNABLES=glibc.malloc.hugetlb=1 added, so that
+// the allocator asks.
 // First touches of memory are page faults, 2.7 ms per MB on a virtual
 // machine where this was measured, a quarter of a short solve's time; with
 // huge pages a 2 MB page is one fault (docs/performance.md, "Huge pages").
