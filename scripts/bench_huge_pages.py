@@ -25,9 +25,9 @@ def run(cmd, huge):
     env["MPATH_HUGE_PAGES"] = "1" if huge else "0"
     t0 = time.monotonic()
     p = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    err = p.stderr.read()  # to its end first: a child filling the pipe would wait for us
     _, status, usage = os.wait4(p.pid, 0)
     wall = time.monotonic() - t0
-    err = p.stderr.read()
     p.stderr.close()
     if status != 0:
         sys.exit("failed: %s\n%s" % (" ".join(cmd), err[-2000:]))
