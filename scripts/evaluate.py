@@ -32,6 +32,9 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_common import timed  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.path.join(ROOT, "build", "bin")
 SHARED = os.path.join(os.path.dirname(ROOT), "shared", "scenes")
@@ -68,18 +71,10 @@ def log(msg):
 
 
 def run(cmd):
-    """Runs a program; its output, and the process's wall and CPU seconds
-    (user + system, every thread), start-up included."""
-    t0 = time.monotonic()
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    out = p.stdout.read()
-    _, status, usage = os.wait4(p.pid, 0)
-    wall = time.monotonic() - t0
-    p.stdout.close()
-    p.returncode = os.waitstatus_to_exitcode(status)
-    if p.returncode != 0:
-        sys.exit("evaluate: failed (exit %d): %s\n%s" % (p.returncode, " ".join(cmd), out[-3000:]))
-    return out, wall, usage.ru_utime + usage.ru_stime
+    """Runs a program alone; the process's wall and CPU seconds (user +
+    system, every thread), start-up included (bench_common.timed, which
+    exits naming the program and its error when it fails)."""
+    return timed([cmd])
 
 
 class Scene:
@@ -110,14 +105,14 @@ class Scene:
                "preprocess_cpu_s": 0.0, "preprocess_rss_mb": 0.0, "store_mb": 0.0}
         if method != "classic":
             shutil.rmtree(store, ignore_errors=True)
-            _, wall, cpu = run([os.path.join(BIN, "mpath-preprocess"), self.config, "-q"] + keys)
+            wall, cpu = run([os.path.join(BIN, "mpath-preprocess"), self.config, "-q"] + keys)
             pre = json.load(open(os.path.join(store, "preprocess.json")))
             row.update(preprocess_s=wall, preprocess_cpu_s=cpu, store_mb=pre["bytes"] / 1e6,
                        preprocess_rss_mb=pre.get("peak_rss_bytes", 0) / 2**20,
                        preprocess_trace_s=pre.get("trace_seconds", 0.0), preprocess_hierarchy_s=pre.get("hierarchy_seconds", 0.0),
                        preprocess_pilot_s=pre.get("pilot_seconds", 0.0),
                        preprocess_first_shot_s=pre.get("first_shot_seconds", 0.0))
-        _, wall, cpu = run([os.path.join(BIN, "mpath-solve"), self.config, "-q"] + keys)
+        wall, cpu = run([os.path.join(BIN, "mpath-solve"), self.config, "-q"] + keys)
         rep = json.load(open(os.path.join(out, "report.json")))
         t = rep["timings"]
         h = rep.get("hierarchy") or {}
