@@ -73,8 +73,9 @@ struct DecodedChunk {
 };
 
 // Lines order[0 .. n) of `from`, in that order, into `out` (line k of `out`
-// is line order[k] of `from`): a pass then reads its lines' events one after
-// another in memory instead of jumping about a chunk of megabytes.
+// is line order[k] of `from`): a traced chunk's lines in stored order
+// (TracedChunk::stored). A pass decodes straight into its order instead
+// (decode_chunk_lines, tested to give what this gives from the whole chunk).
 void gather_lines(const DecodedChunk& from, const uint32_t* order, size_t n, DecodedChunk& out);
 
 // Decodes `lines` records holding `events` events in all from `data`; false
