@@ -44,4 +44,14 @@ size_t zstd_compressed_size(std::string_view raw, int level) {
   return compress_to_buffer(raw, level, false, buffer);
 }
 
+double zstd_sampled_size(std::string_view raw, int level) {
+  constexpr size_t kSlices = 8, kSlice = size_t{16} << 10;
+  if (raw.size() <= kSlices * kSlice) return static_cast<double>(zstd_compressed_size(raw, level));
+  thread_local std::string sample;
+  sample.clear();
+  for (size_t k = 0; k < kSlices; ++k) sample.append(raw.substr((raw.size() - kSlice) * k / (kSlices - 1), kSlice));
+  return static_cast<double>(zstd_compressed_size(sample, level)) * static_cast<double>(raw.size()) /
+         static_cast<double>(sample.size());
+}
+
 }  // namespace mpath::linestore

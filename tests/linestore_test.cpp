@@ -13,6 +13,7 @@
 #include "manifest.h"
 #include "test_util.h"
 #include "varint.h"
+#include "zstd_frame.h"
 
 namespace mpath::linestore {
 namespace {
@@ -111,6 +112,51 @@ TEST(LineStore, RoundTripsRandomLineRecords) {
     EXPECT_EQ(records(chunk), written[c]) << "chunk " << c;
   }
   EXPECT_FALSE(std::filesystem::exists(partial_path(dir / "box.lines")));
+}
+
+// Chunks of megabytes choose steps or plain ids from zstd's size of a sample
+// of each stream: lines along runs of neighbouring ids get steps, lines
+// through ids at random get plain ids, as the whole streams' sizes decide.
+// An encoder reset for the next chunk writes what a fresh one writes, and
+// the sampled size is exact up to 128 KB and near the whole's beyond.
+TEST(LineStore, LongChunksChooseStepsOrPlainIdsAsTheWholeStreamsWould) {
+  std::mt19937 rng(11);
+  const auto make_lines = [&](bool runs) {
+    std::vector<LineRecord> lines(60'000);
+    for (LineRecord& l : lines) {
+      uint32_t id = std::uniform_int_distribution<uint32_t>(0, 1'000'000)(rng);
+      for (int k = std::uniform_int_distribution<int>(2, 8)(rng); k > 0; --k) {
+        id = runs ? id + std::uniform_int_distribution<uint32_t>(1, 3)(rng)
+                  : std::uniform_int_distribution<uint32_t>(0, 1'000'000)(rng);
+        l.events.push_back({Event::patch, id, k % 2 == 0});
+      }
+    }
+    return lines;
+  };
+  ChunkEncoder reused;
+  for (const bool runs : {true, false, true}) {
+    const std::vector<LineRecord> lines = make_lines(runs);
+    ChunkEncoder fresh(lines.size()), plain_only(lines.size());
+    reused.reset(lines.size());
+    for (const LineRecord& l : lines) {
+      fresh.add(l);
+      reused.add(l);
+    }
+    const std::string raw = fresh.finish();
+    EXPECT_EQ(reused.finish(), raw) << "runs " << runs;
+    EXPECT_EQ(reused.events(), fresh.events());
+    EXPECT_GT(raw.size(), size_t{384} << 10);  // thrice the sample
+    EXPECT_EQ(raw[0] & 1, runs ? 1 : 0) << "runs " << runs;
+    DecodedChunk chunk;
+    ASSERT_TRUE(decode_chunk(reinterpret_cast<const unsigned char*>(raw.data()), raw.size(), lines.size(),
+                             fresh.events(), chunk));
+    EXPECT_EQ(records(chunk), lines);
+    // The sampled size against the exact one, on the chunk and on its first 100 KB.
+    const double exact = static_cast<double>(zstd_compressed_size(raw, -1));
+    EXPECT_NEAR(zstd_sampled_size(raw, -1), exact, 0.1 * exact);
+    const std::string_view head(raw.data(), 100'000);
+    EXPECT_EQ(zstd_sampled_size(head, -1), static_cast<double>(zstd_compressed_size(head, -1)));
+  }
 }
 
 // Events after a line's first are stored as plain ids or as steps from the

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "test_util.h"
 
 namespace mpath {
@@ -70,6 +72,96 @@ TEST(OrderTies, KeepsLiveFacesInsideWhenALineOnlyCrossesTwoContacts) {
   EXPECT_FALSE(live_backward(hits.front()));
   EXPECT_FALSE(live_forward(hits.back()));
   for (size_t i = 0; i + 1 < hits.size(); ++i) EXPECT_EQ(live_forward(hits[i]), live_backward(hits[i + 1])) << i;
+}
+
+// Random lines through random patches (live, black or invisible backs), with
+// groups of one to five crossings at equal distance: order_ties must keep
+// each group's crossings in its place, reach the least number of live/black
+// pairs that any order of the groups reaches (found by trying every one),
+// and give the same order whatever order the crossings were reported in.
+TEST(OrderTies, FindsTheLeastLiveBlackPairsOnRandomLines) {
+  Rng rng = make_rng(20261204, 0, 0);
+  PatchMesh mesh;
+  for (int p = 0; p < 40; ++p) {
+    const double u = uniform(rng);
+    const int back = u < 0.4 ? 2 * p + 1 : u < 0.8 ? kBlackSide : kInvisibleSide;
+    mesh.patch_faces.push_back({2 * p, back});
+  }
+  const auto live_forward = [&](const LineHit& h) { return facing(mesh, h).forward >= 0; };
+  const auto live_backward = [&](const LineHit& h) { return facing(mesh, h).backward >= 0; };
+  // Live/black pairs on the line, empty space (black) beyond both ends.
+  const auto cost = [&](const std::vector<LineHit>& hits) {
+    int c = 0;
+    bool before = false;
+    for (const LineHit& h : hits) {
+      c += before != live_backward(h);
+      before = live_forward(h);
+    }
+    return c + (before ? 1 : 0);
+  };
+  int lines_with_ties = 0, improved = 0;
+  for (int line = 0; line < 3000; ++line) {
+    std::vector<LineHit> hits;
+    std::vector<std::pair<size_t, size_t>> groups;
+    size_t combinations = 1;
+    std::vector<int> patches(40);
+    for (int p = 0; p < 40; ++p) patches[static_cast<size_t>(p)] = p;
+    std::shuffle(patches.begin(), patches.end(), rng);
+    size_t next_patch = 0;
+    const int group_count = 1 + static_cast<int>(uniform(rng) * 4);
+    for (int g = 0; g < group_count; ++g) {
+      const size_t n = 1 + static_cast<size_t>(uniform(rng) * uniform(rng) * 5);
+      size_t f = 1;
+      for (size_t k = 2; k <= n; ++k) f *= k;
+      if (combinations * f > 20000) break;
+      combinations *= f;
+      groups.push_back({hits.size(), n});
+      for (size_t k = 0; k < n; ++k)
+        hits.push_back({1.0 + g + 1e-12 * static_cast<double>(k), patches[next_patch++], uniform(rng) < 0.5});
+    }
+    lines_with_ties += hits.size() > groups.size();
+    // The least cost over every order of every group.
+    std::vector<LineHit> trial = hits;
+    for (auto [lo, n] : groups)
+      std::sort(trial.begin() + static_cast<long>(lo), trial.begin() + static_cast<long>(lo + n),
+                [](const LineHit& a, const LineHit& b) { return a.patch < b.patch; });
+    int least = cost(trial);
+    const auto advance = [&] {  // the next combination of group orders; false after the last
+      for (auto [lo, n] : groups) {
+        const auto by_patch = [](const LineHit& a, const LineHit& b) { return a.patch < b.patch; };
+        if (std::next_permutation(trial.begin() + static_cast<long>(lo), trial.begin() + static_cast<long>(lo + n), by_patch))
+          return true;
+      }
+      return false;
+    };
+    while (advance()) least = std::min(least, cost(trial));
+
+    std::vector<LineHit> ordered = hits;
+    order_ties(mesh, 1e-9, ordered);
+    ASSERT_EQ(cost(ordered), least) << "line " << line;
+    improved += cost(ordered) < cost(hits);
+    for (auto [lo, n] : groups) {
+      std::vector<int> a, b;
+      for (size_t k = lo; k < lo + n; ++k) {
+        a.push_back(hits[k].patch);
+        b.push_back(ordered[k].patch);
+      }
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      ASSERT_EQ(a, b) << "line " << line;
+    }
+    std::vector<LineHit> shuffled = hits;
+    for (auto [lo, n] : groups)
+      std::shuffle(shuffled.begin() + static_cast<long>(lo), shuffled.begin() + static_cast<long>(lo + n), rng);
+    order_ties(mesh, 1e-9, shuffled);
+    for (size_t k = 0; k < hits.size(); ++k) {
+      ASSERT_EQ(shuffled[k].patch, ordered[k].patch) << "line " << line;
+      ASSERT_EQ(shuffled[k].along, ordered[k].along) << "line " << line;
+    }
+  }
+  // The cases must be ones where the order matters.
+  EXPECT_GT(lines_with_ties, 1500);
+  EXPECT_GT(improved, 500);
 }
 
 // A pass over the column with nothing to send yet and `share` per crossing.
