@@ -96,7 +96,7 @@ struct Options {
   struct Store {
     std::filesystem::path dir = "store";
     int chunk_lines = 65536;  // lines per compressed chunk
-    int zstd_level = 6;       // zstd compression level of chunks
+    int zstd_level = 3;       // zstd compression level of chunks (docs/performance.md, "The store")
   } store;
 
   struct Output {

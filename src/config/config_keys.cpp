@@ -461,7 +461,7 @@ std::vector<ConfigKey> make_table() {
        GET(o.store.dir.string())},
       {"store.chunk_lines", "lines per compressed chunk (shapes the store)",
        SET(o.store.chunk_lines = static_cast<int>(in_range(get_integer(n, s), 256, 1 << 24, s))), GET(o.store.chunk_lines)},
-      {"store.zstd_level", "zstd level of the chunks",
+      {"store.zstd_level", "zstd level of the chunks (higher: smaller stores, slower preprocessing)",
        SET(o.store.zstd_level = static_cast<int>(in_range(get_integer(n, s), 1, 19, s))), GET(o.store.zstd_level)},
       {"output.dir", "result folder (relative to the config file), created if missing", SET(o.output.dir = get_path(n, s)),
        GET(o.output.dir.string())},
