@@ -43,8 +43,8 @@ class ChunkEncoder {
  public:
   // `lines`: how many lines will be added (to size the streams once).
   explicit ChunkEncoder(size_t lines = 0) { reset(lines); }
-  // Empties the encoder for another chunk, keeping its memory (a fresh
-  // encoder a chunk faulted in megabytes of new pages every time).
+  // Empties the encoder for another chunk, keeping its memory (a thread's
+  // encoder serves chunk after chunk without allocating again).
   void reset(size_t lines);
   void add(const LineRecord& line) { add(line.entry_ar, line.exit_ar, line.events.data(), line.events.size()); }
   void add(uint32_t entry_ar, uint32_t exit_ar, const Event* events, size_t count);

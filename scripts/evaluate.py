@@ -783,7 +783,9 @@ from this run's CSVs; what follows explains them, from the profiles in
   A first run spends about four fifths of its time preprocessing, the
   first shot it traces for the store included (the table above); the
   preprocess's profile (BIG ROOM, docs/performance.md) is Embree's tracing
-  40 %, zstd 12 %, line generation 8 %, encoding 6 %, the class counts
+  40 %, zstd 12 % at level 6 (the chunks' default until December 2026;
+  level 3 now, which took 4-7 % off the preprocess's CPU seconds for stores
+  2-3 % larger), line generation 8 %, encoding 6 %, the class counts
   4.5 %: per line about what a classic pass costs, so a first run's
   speed-up at equal error is roughly one over the square of the error ratio
   at equal lines, less what a first run costs beyond a classic solve of the
