@@ -48,11 +48,9 @@ fs::path partial_path(const fs::path& path) {
   return path.parent_path() / name;
 }
 
-const std::string& encode_lines(const DecodedChunk& lines, const uint32_t* order, uint64_t& events) {
+std::string encode_lines(const DecodedChunk& lines, const uint32_t* order, uint64_t& events) {
   const size_t n = lines.lines();
-  thread_local ChunkEncoder encoder;
-  thread_local std::string raw;
-  encoder.reset(n);
+  ChunkEncoder encoder(n);
   // The lines are taken in `order`, at random in a chunk of megabytes: their
   // events are announced a few lines ahead, or the encoder waits on memory.
   constexpr size_t kAhead = 8;
@@ -62,8 +60,7 @@ const std::string& encode_lines(const DecodedChunk& lines, const uint32_t* order
     encoder.add(lines.entry_ar[i], lines.exit_ar[i], lines.events.data() + lines.first[i], lines.first[i + 1] - lines.first[i]);
   }
   events = encoder.events();
-  encoder.finish(raw);
-  return raw;
+  return encoder.finish();
 }
 
 EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_t lines, uint64_t events, int level) {

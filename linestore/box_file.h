@@ -69,9 +69,8 @@ struct EncodedChunk {
 
 // Encodes lines order[0 .. n) of `lines` (n = lines.lines()), in that
 // order; then compress_chunk makes the frame of lines [first_line,
-// first_line + n). Two steps, for callers that time them. The encoded
-// chunk is the thread's, kept until its next call (its memory reused).
-const std::string& encode_lines(const DecodedChunk& lines, const uint32_t* order, uint64_t& events);
+// first_line + n). Two steps, for callers that time them.
+std::string encode_lines(const DecodedChunk& lines, const uint32_t* order, uint64_t& events);
 EncodedChunk compress_chunk(const std::string& raw, uint64_t first_line, uint64_t lines, uint64_t events, int level);
 
 // Writes a box file under a temporary name; `finish` renames it into place.

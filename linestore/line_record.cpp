@@ -55,18 +55,7 @@ void ChunkEncoder::add(uint32_t entry_ar, uint32_t exit_ar, const Event* events,
   event_count_ += count;
 }
 
-void ChunkEncoder::reset(size_t lines) {
-  lines_.clear();
-  events_.clear();
-  steps_.clear();
-  lines_.reserve(lines * 2);
-  events_.reserve(lines * 8);
-  steps_.reserve(lines * 8);
-  previous_first_ = 0;
-  event_count_ = 0;
-}
-
-void ChunkEncoder::finish(std::string& out) const {
+std::string ChunkEncoder::finish() {
   // Crossings after one another on a line are often of one object (the two
   // sides of a desk top, books side by side), and where its patches are
   // numbered together the steps are short (OFFICE: a fifth fewer bytes);
@@ -75,11 +64,12 @@ void ChunkEncoder::finish(std::string& out) const {
   // (on the whole streams it cost 3-4 % of OFFICE's preprocess).
   const bool steps = events_ != steps_ && zstd_sampled_size(steps_, -1) < zstd_sampled_size(events_, -1);
   const std::string& events = steps ? steps_ : events_;
-  out.clear();
+  std::string out;
   out.reserve(10 + lines_.size() + events.size());
   put_varint(out, (static_cast<uint64_t>(lines_.size()) << 1) | (steps ? 1 : 0));
   out += lines_;
   out += events;
+  return out;
 }
 
 void DecodedChunk::clear() {

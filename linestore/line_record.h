@@ -42,22 +42,17 @@ struct LineRecord {
 class ChunkEncoder {
  public:
   // `lines`: how many lines will be added (to size the streams once).
-  explicit ChunkEncoder(size_t lines = 0) { reset(lines); }
-  // Empties the encoder for another chunk, keeping its memory (a thread's
-  // encoder serves chunk after chunk without allocating again).
-  void reset(size_t lines);
+  explicit ChunkEncoder(size_t lines = 0) {
+    lines_.reserve(lines * 2);
+    events_.reserve(lines * 8);
+    steps_.reserve(lines * 8);
+  }
   void add(const LineRecord& line) { add(line.entry_ar, line.exit_ar, line.events.data(), line.events.size()); }
   void add(uint32_t entry_ar, uint32_t exit_ar, const Event* events, size_t count);
   uint64_t events() const { return event_count_; }
   // The chunk, its later events' ids plain or as steps, whichever zstd
   // makes smaller (docs/store-format.md).
-  std::string finish() {
-    std::string out;
-    finish(out);
-    return out;
-  }
-  // The same into `out` (its memory reused).
-  void finish(std::string& out) const;
+  std::string finish();
 
  private:
   std::string lines_;

@@ -168,7 +168,7 @@ linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, co
                 chunks.trace(c, records, tallies.local());
                 auto t1 = clock::now();
                 uint64_t events = 0;
-                const std::string& raw = linestore::encode_lines(records.lines, records.order.data(), events);
+                const std::string raw = linestore::encode_lines(records.lines, records.order.data(), events);
                 auto t2 = clock::now();
                 linestore::EncodedChunk out =
                     linestore::compress_chunk(raw, chunks.first_line(c), records.order.size(), events, options.store.zstd_level);
