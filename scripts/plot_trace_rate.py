@@ -27,6 +27,7 @@ def main(stem, paths):
         json.dump(records, f, indent=2)
     fields = ["scene", "patches", "lines", "threads", "sequence", "raw_lines_per_s", "tracer_lines_per_s", "solver_lines_per_s", "ratio", "ratio_min", "ratio_max",
               "raw_hits_per_line", "preprocess_lines_per_s", "preprocess_lines_per_cpu_s", "preprocess_ratio",
+              "preprocess_ratio_min", "preprocess_ratio_max",
               "preprocess_hits_per_line", "commit", "cpu"]
     with open(stem + ".csv", "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
