@@ -7,6 +7,7 @@ import sys
 import time
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+BIN = os.path.join(ROOT, "build", "bin")  # the programs scripts/build makes
 
 
 def write_csv(name, rows):

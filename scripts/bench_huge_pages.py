@@ -8,9 +8,8 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, write_csv  # noqa: E402
+from bench_common import BIN, ROOT, write_csv  # noqa: E402
 
-BIN = os.path.join(ROOT, "build", "bin")
 SHARED_OFFICE2 = os.path.join(ROOT, "..", "shared", "scenes", "office2", "office2.mgf")
 # (name, config, lines)
 SCENES = [("ROOM", "configs/room.toml", 4_000_000), ("OFFICE", "configs/office.toml", 4_000_000),

@@ -18,11 +18,9 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import write_csv  # noqa: E402
+from bench_common import BIN, ROOT, write_csv  # noqa: E402
 from solution import read_solution  # noqa: E402
 
-ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
-BIN = os.path.join(ROOT, "build", "bin")
 METHODS = ("multipath", "hierarchical")
 
 

@@ -18,9 +18,8 @@ import shutil
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, timed, write_csv  # noqa: E402
+from bench_common import BIN, ROOT, timed, write_csv  # noqa: E402
 
-BIN = os.path.join(ROOT, "build", "bin")
 CONFIG = os.path.join(ROOT, "configs", "office.toml")
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
 

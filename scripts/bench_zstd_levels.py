@@ -11,9 +11,8 @@ import statistics
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, timed, write_csv  # noqa: E402
+from bench_common import BIN, ROOT, timed, write_csv  # noqa: E402
 
-BIN = os.path.join(ROOT, "build/bin")
 SCENES = [("ROOM", "configs/room.toml"), ("BIG ROOM", "configs/bigroom.toml"), ("OFFICE", "configs/office.toml"),
           ("office2", "configs/office2.toml")]
 

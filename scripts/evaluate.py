@@ -33,10 +33,9 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import timed  # noqa: E402
+from bench_common import BIN, timed  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BIN = os.path.join(ROOT, "build", "bin")
 SHARED = os.path.join(os.path.dirname(ROOT), "shared", "scenes")
 
 # The scenes, their ladders of lines (hierarchical and classic alike; classic

@@ -121,17 +121,15 @@ TEST(OrderTies, FindsTheLeastLiveBlackPairsOnRandomLines) {
     }
     lines_with_ties += hits.size() > groups.size();
     // The least cost over every order of every group.
+    const auto by_patch = [](const LineHit& a, const LineHit& b) { return a.patch < b.patch; };
     std::vector<LineHit> trial = hits;
     for (auto [lo, n] : groups)
-      std::sort(trial.begin() + static_cast<long>(lo), trial.begin() + static_cast<long>(lo + n),
-                [](const LineHit& a, const LineHit& b) { return a.patch < b.patch; });
+      std::sort(trial.begin() + static_cast<long>(lo), trial.begin() + static_cast<long>(lo + n), by_patch);
     int least = cost(trial);
     const auto advance = [&] {  // the next combination of group orders; false after the last
-      for (auto [lo, n] : groups) {
-        const auto by_patch = [](const LineHit& a, const LineHit& b) { return a.patch < b.patch; };
+      for (auto [lo, n] : groups)
         if (std::next_permutation(trial.begin() + static_cast<long>(lo), trial.begin() + static_cast<long>(lo + n), by_patch))
           return true;
-      }
       return false;
     };
     while (advance()) least = std::min(least, cost(trial));
