@@ -291,6 +291,14 @@ void BoxStore::verify_files(const fs::path& dir, const fs::path& manifest_path) 
     progress.advance(f.bytes);
   });
   progress.finish();
+  // The ranks go on together once every one has checked its files: a rank
+  // that found damage ends them all (Ranks::finish) while the others wait
+  // here, so the error is the hash's, naming the file, and not whatever
+  // another rank's passes meet later in that file (a chunk's own checksum).
+  if (Ranks::size() > 1) {
+    uint64_t checked = 1;
+    Ranks::sum(&checked, 1);
+  }
 }
 
 void BoxStore::open_files(const fs::path& dir, const fs::path& manifest_path) {
