@@ -184,7 +184,8 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
   lay_out_boxes(mesh);
   verify_files(options.store.dir, manifest_path);
   open_files(options.store.dir, manifest_path);
-  for (size_t b = 0; b < boxes_.size(); ++b) derive_box_data(mesh, b);
+  // Each box's data from its own counts and its parent's (read only here).
+  tbb::parallel_for(size_t{0}, boxes_.size(), [&](size_t b) { derive_box_data(mesh, b); });
   if (hierarchy_.transparent)
     line_sets_ = std::make_shared<const LineSets>(derive_line_sets(*this, mesh));
 }

@@ -458,7 +458,7 @@ Remaining remaining_power(const BoxStore& store, const RadiosityState& state) {
   return r;
 }
 
-uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, RadiosityState& state,
+uint64_t shoot_uncarried(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store, RadiosityState& state,
                          unsigned pass, unsigned long long seed, int shards_wanted) {
   const int ch = state.channels;
   std::vector<int> faces;
@@ -475,7 +475,7 @@ uint64_t shoot_uncarried(const PatchMesh& mesh, const Tracer& tracer, const BoxS
   return shoot_unshot(mesh, tracer, faces, state, pass, seed, shards_wanted);
 }
 
-uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<int> faces, RadiosityState& state,
+uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::vector<int> faces, RadiosityState& state,
                       unsigned pass, unsigned long long seed, int shards_wanted) {
   const int ch = state.channels;
   if (faces.empty()) return 0;
@@ -483,6 +483,7 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<i
   const int shards = std::max(1, std::min<int>(shards_wanted, static_cast<int>(faces.size())));
   std::vector<ShardAccumulator> acc(shards);
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
+  const Tracer& traced = tracer.get();
   run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
     ShardAccumulator& a = acc[s];
     for (size_t i = faces.size() * s / shards; i < faces.size() * (s + 1) / shards; ++i) {
@@ -492,7 +493,7 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<i
       for (int c = 0; c < ch; ++c) power[c] = state.unshot[state.at(static_cast<size_t>(face), c)] / kUncarriedLines;
       for (int k = 0; k < kUncarriedLines; ++k)
         shoot_local_line(mesh, state, face, power, rng, [&](int from, const Vec3& org, const Vec3& dir) {
-          return tracer.nearest_from(from, org, dir, tfar);
+          return traced.nearest_from(from, org, dir, tfar);
         }, a);
     }
   });
@@ -503,7 +504,7 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<i
   return faces.size() * kUncarriedLines;
 }
 
-PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store,
+PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store,
                            RadiosityState& state, const IterationLog& log, unsigned pass, int shards_wanted,
                            std::vector<BoxPassStats>* per_box, uint64_t* uncarried) {
   if (const LineSets* sets = store.line_sets())

@@ -515,7 +515,7 @@ void plan_iteration(const BoxStore& store, const LineSets& sets, const Radiosity
   for (size_t s = 0; s < sets.slots(); ++s) flight.share[s] = taken[s] > 0 ? 1.0 / taken[s] : 0.0;
 }
 
-PassStats line_set_iteration(const PatchMesh& mesh, const Tracer& tracer, const BoxStore& store, const LineSets& sets,
+PassStats line_set_iteration(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store, const LineSets& sets,
                              RadiosityState& state, unsigned pass, int shards_wanted, double power_per_line,
                              unsigned long long seed, std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines) {
   const auto start = std::chrono::steady_clock::now();

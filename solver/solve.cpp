@@ -45,7 +45,7 @@ std::unique_ptr<BoxStore> open_store(const Options& options, const PatchMesh& me
 }
 
 // Restores the state from the checkpoint (--resume) or runs the first shot.
-void start_state(const Options& options, const SolveFlags& flags, const PatchMesh& mesh, const Tracer& tracer,
+void start_state(const Options& options, const SolveFlags& flags, const PatchMesh& mesh, const TracerOnDemand& tracer,
                  const BoxStore* store, const Checkpoint& checkpoint, const std::vector<PointLight>& lights,
                  RadiosityState& state, SolveRecord& record) {
   if (flags.resume && std::filesystem::exists(checkpoint.path)) {
@@ -68,13 +68,14 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
                                         record.shot);
   if (!store || !traced_because.empty()) {
     if (store) spdlog::info("first shot traced: {}", traced_because);
-    record.shot = first_shot(mesh, tracer, state, shot.plan, options.lines.seed, options.solver.shards, accelerated.get());
+    record.shot = first_shot(mesh, tracer.get(), state, shot.plan, options.lines.seed, options.solver.shards,
+                             accelerated.get());
     record.shot.traced_because = traced_because;
   } else {
     spdlog::info("first shot: {} local lines read from the store ({:.2f} s)", record.shot.lines, record.shot.seconds);
   }
   for (size_t l = 0; l < lights.size(); ++l) {
-    const uint64_t shot_lines = shoot_light(mesh, tracer, state, lights[l], shot.light_lines[l],
+    const uint64_t shot_lines = shoot_light(mesh, tracer.get(), state, lights[l], shot.light_lines[l],
                                             options.lines.seed + 7919 * (l + 1), options.solver.shards);
     record.shot.lines += shot_lines;
     record.lights[l].first_shot_lines = shot_lines;
@@ -83,7 +84,7 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
 }
 
 // Iterations of the stored-line methods or classic passes, a checkpoint after each.
-void run_iterations(const Options& options, const PatchMesh& mesh, const Tracer& tracer, const BoxStore* store,
+void run_iterations(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore* store,
                     const Checkpoint& checkpoint, RadiosityState& state, SolveRecord& record) {
   const auto start = clock::now();
   record.hits_before = record.iterations.hits;
@@ -97,7 +98,7 @@ void run_iterations(const Options& options, const PatchMesh& mesh, const Tracer&
             }, save);
   } else {
     iterate(options, state, log, [&](unsigned pass) {
-      return classic_pass(mesh, tracer, state, classic_pass_lines(options, mesh, log, state), options.lines.seed, pass,
+      return classic_pass(mesh, tracer.get(), state, classic_pass_lines(options, mesh, log, state), options.lines.seed, pass,
                           options.solver.shards, options.lines.sequence);
     }, save);
   }
@@ -148,7 +149,7 @@ void log_remaining(const Options& options, const PatchMesh& mesh, const BoxStore
 }
 
 // solution.ply and, per camera, the EXR and PNG images; their names in `record`.
-void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& tracer,
+void write_outputs(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer,
                    const std::vector<PointLight>& lights, const RadiosityState& state,
                    SolveRecord& record) {
   const auto start = clock::now();
@@ -157,7 +158,7 @@ void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& 
   if (!options.cameras.empty() && (options.output.exr || options.output.png)) {
     const VertexRadiosity vertex_radiosity(mesh, state);
     for (const CameraOptions& cam : options.cameras) {
-      const Image image = render_camera(cam, mesh, tracer, vertex_radiosity, options.lines.seed);
+      const Image image = render_camera(cam, mesh, tracer.get(), vertex_radiosity, options.lines.seed);
       if (options.output.exr) {
         std::map<std::string, std::string> meta{{"mpathVersion", MPATH_VERSION},
                                                 {"mpathCommit", MPATH_GIT_COMMIT},
@@ -180,7 +181,7 @@ void write_outputs(const Options& options, const PatchMesh& mesh, const Tracer& 
   }
   const std::vector<GridOptions> none;  // output.grids = false
   for (const GridOptions& grid : options.output.grids ? options.grids : none) {
-    const GridResult result = measure_grid(grid, mesh, tracer, state, lights, options.lines.seed);
+    const GridResult result = measure_grid(grid, mesh, tracer.get(), state, lights, options.lines.seed);
     write_grid_csv(options.output.dir / (grid.name + ".csv"), result);
     write_grid_png(options.output.dir / (grid.name + ".png"), result);
     record.outputs.push_back(grid.name + ".csv");
@@ -228,9 +229,9 @@ void run_solve(const Options& options, const SolveFlags& flags) {
                         "another output.dir, or wait");
   }
 
-  const auto bvh_start = clock::now();
-  const Tracer tracer(mesh);
-  record.timings.bvh = seconds_since(bvh_start);
+  // Embree's BVH is built when something is first traced (the first shot, a
+  // classic pass, a camera); a kept store's solve may trace nothing.
+  const TracerOnDemand tracer(mesh);
 
   RadiosityState state = make_state(prepared.scene, mesh);
   std::vector<PointLight> lights;
@@ -247,6 +248,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   log_remaining(options, mesh, store.get(), state, record.iterations, record.warnings);
   if (!Ranks::root()) return;
   write_outputs(options, mesh, tracer, lights, state, record);
+  record.timings.bvh = tracer.build_seconds();
 
   record.timings.total = seconds_since(start);
   const nlohmann::json report = solve_report(options, prepared, state, store.get(), record);

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <random>
+#include <algorithm>
 #include <set>
 
 #include <cmath>
@@ -190,6 +192,69 @@ TEST(SolutionPly, CarriesToneMappedColoursForViewers) {
   EXPECT_EQ(at, text.size());
   EXPECT_EQ(face_red[0], 255);
   for (size_t f = 1; f < face_red.size(); ++f) EXPECT_EQ(face_red[f], srgb(0.8)) << "face " << f;
+}
+
+// display_srgb8 looks codes up in a table of the values where they step up;
+// it must give the transfer function's rounded code everywhere, at the
+// steps above all (computed here from the inverse function, and a few
+// float steps either side of each).
+TEST(SolutionPly, ColourTableGivesTheTransferFunctionsCodes) {
+  const auto direct = [](double v) {
+    v = std::clamp(v, 0.0, 1.0);
+    const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055;
+    return static_cast<int>(std::lround(255 * s));
+  };
+  std::vector<double> values = {-1.0, 0.0, 1e-300, 0.0031308, 1.0, 2.0, 1e300};
+  for (int k = 1; k < 256; ++k) {
+    const double s = (k - 0.5) / 255;  // the sRGB value where code k begins
+    const double linear = s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
+    double below = linear, above = linear;
+    for (int u = 0; u < 8; ++u) {
+      values.push_back(below = std::nextafter(below, 0.0));
+      values.push_back(above = std::nextafter(above, 1.0));
+    }
+    values.push_back(linear);
+  }
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (int i = 0; i < 1000000; ++i) values.push_back(std::pow(uniform(rng), 3.0));
+  int wrong = 0;
+  for (const double v : values)
+    if (display_srgb8(v) != direct(v) && ++wrong <= 5) ADD_FAILURE() << "linear " << v << ": " << +display_srgb8(v) << ", not " << direct(v);
+  EXPECT_EQ(wrong, 0);
+}
+
+// solution.ply is written in blocks of 65,536 records filled in parallel:
+// a mesh of more faces reads back face by face as the state holds it.
+TEST(SolutionPly, ManyFacesReadBackInOrder) {
+  TempDir dir;
+  Scene scene;
+  scene.materials.push_back(Material{});
+  scene.materials[0].rho = {0.5, 0.4, 0.3};
+  scene.objects.push_back({"plate"});
+  Polygon quad;
+  quad.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  scene.polygons.push_back(quad);
+  const PatchMesh mesh = build_mesh(scene, 1.0 / 150000);
+  ASSERT_GT(mesh.face_count(), 2 * 65536u);
+  RadiosityState state = make_state(scene, mesh);
+  for (size_t f = 0; f < mesh.face_count(); ++f)
+    for (int c = 0; c < state.channels; ++c)
+      state.phi[state.at(f, c)] = (1.0 + static_cast<double>(f % 977) + c / 4.0) * mesh.face_area(static_cast<int>(f));
+  write_solution_ply(dir / "solution.ply", mesh, state.solution_faces(mesh));
+  const SolutionFaces back = read_solution_ply(dir / "solution.ply");
+  ASSERT_EQ(back.area.size(), mesh.face_count());
+  const std::vector<SolutionFace> faces = state.solution_faces(mesh);
+  size_t differ = 0;
+  for (size_t f = 0; f < faces.size(); ++f)
+    for (int c = 0; c < 3; ++c)
+      differ += back.radiosity[f][c] != static_cast<float>(faces[f].radiosity[c]) ||
+                back.area[f] != static_cast<float>(mesh.face_area(static_cast<int>(f)));
+  EXPECT_EQ(differ, 0u);
+  const Scene geometry = read_ply(dir / "solution.ply");
+  ASSERT_EQ(geometry.polygons.size(), mesh.face_count());
+  for (size_t f = 0; f < geometry.polygons.size(); f += 4099)
+    EXPECT_NEAR(polygon_area(geometry.polygons[f].vertices), mesh.face_area(static_cast<int>(f)), 1e-9) << f;
 }
 
 TEST(PlyReader, ReportsTruncatedAndMalformedFiles) {

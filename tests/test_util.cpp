@@ -160,13 +160,13 @@ StoredSolve solve_stored(const Options& options, const std::function<void(const 
   const BoxStore store(options, s.mesh);
   s.boxes = store.box_count();
   s.depth = store.hierarchy().max_depth();
-  const Tracer tracer(s.mesh);
+  const TracerOnDemand tracer(s.mesh);
   s.state = make_state(scene, s.mesh);
   add_ar_state(store, s.state);
   std::unique_ptr<SubsceneNearest> accelerated;
   if (options.first_shot.accelerate && !store.line_sets())
     accelerated = std::make_unique<SubsceneNearest>(s.mesh, store);
-  first_shot(s.mesh, tracer, s.state, first_shot_lines(options), options.lines.seed, options.solver.shards,
+  first_shot(s.mesh, tracer.get(), s.state, first_shot_lines(options), options.lines.seed, options.solver.shards,
              emitter_crossings(options, store.face_crossings(s.mesh.face_count())), accelerated.get());
   iterate(options, s.state, s.log, [&](unsigned pass) {
     const PassStats p = stored_iteration(options, s.mesh, tracer, store, s.state, s.log, pass, options.solver.shards);

@@ -11,6 +11,9 @@
 #include <map>
 #include <sstream>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "atomic_file.h"
 #include "error.h"
 #include "scene_readers.h"
@@ -21,15 +24,66 @@ namespace {
 
 static_assert(std::endian::native == std::endian::little, "solution.ply is written and read as native little-endian");
 
+// Appends v's bytes at `at` and moves past them.
 template <typename T>
-void put(std::ostream& out, T v) {
-  out.write(reinterpret_cast<const char*>(&v), sizeof(T));
+void put(char*& at, T v) {
+  std::memcpy(at, &v, sizeof(T));
+  at += sizeof(T);
 }
 
-uint8_t srgb8(double linear) {
+uint8_t srgb8_direct(double linear) {
   const double v = std::clamp(linear, 0.0, 1.0);
   const double s = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
   return static_cast<uint8_t>(std::lround(255.0 * s));
+}
+
+// srgb8_direct without a pow per value (half a million of them on an
+// 86,000-face scene, a third of the file's time): the linear values where
+// the rounded code steps up, found once by bisection on srgb8_direct
+// itself, so the table gives its codes exactly.
+class Srgb8 {
+ public:
+  Srgb8() {
+    for (int k = 1; k < 256; ++k) {
+      double lo = 0.0, hi = 1.0;  // srgb8_direct(lo) < k <= srgb8_direct(hi)
+      for (int i = 0; i < 200 && std::nextafter(lo, 2.0) < hi; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (srgb8_direct(mid) < k ? lo : hi) = mid;
+      }
+      step_[k - 1] = hi;
+    }
+  }
+  uint8_t operator()(double linear) const {
+    if (!(linear > 0.0)) return 0;  // NaN never reaches here (checked before writing)
+    return static_cast<uint8_t>(std::upper_bound(step_.begin(), step_.end(), linear) - step_.begin());
+  }
+
+ private:
+  std::array<double, 255> step_{};  // step_[k - 1]: the least linear value coded k
+};
+
+// Writes `count` records in blocks: each block's records are placed in
+// parallel (`size(i)` bytes each, `fill(i, at)` writes them), then the
+// block goes to `out` in one write, so memory stays a block whatever the
+// scene's size.
+template <typename Size, typename Fill>
+void write_records(std::ostream& out, size_t count, Size size, Fill fill) {
+  constexpr size_t kBlock = 65536;
+  std::vector<size_t> offset;
+  std::vector<char> buffer;
+  for (size_t first = 0; first < count; first += kBlock) {
+    const size_t n = std::min(kBlock, count - first);
+    offset.assign(n + 1, 0);
+    for (size_t i = 0; i < n; ++i) offset[i + 1] = offset[i] + size(first + i);
+    buffer.resize(offset[n]);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        char* at = buffer.data() + offset[i];
+        fill(first + i, at);
+      }
+    });
+    out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+  }
 }
 
 // The display scale of the colours: the 95th percentile (by area) of the
@@ -55,6 +109,11 @@ double display_scale(const PatchMesh& mesh, const std::vector<SolutionFace>& fac
 }
 
 }  // namespace
+
+uint8_t display_srgb8(double linear) {
+  static const Srgb8 table;
+  return table(linear);
+}
 
 void write_solution_ply(const std::filesystem::path& path, const PatchMesh& mesh, const std::vector<SolutionFace>& faces) {
   // Never a NaN or an infinity in a result: a value no float holds stops the write before anything is written.
@@ -94,31 +153,35 @@ void write_solution_ply(const std::filesystem::path& path, const PatchMesh& mesh
     out << "property float " << name << "\n";
   out << "property int polygon\nproperty int object\n"
       << "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
-  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+  const auto srgb8 = display_srgb8;
+  write_records(out, mesh.vertices.size(), [](size_t) { return size_t{15}; }, [&](size_t i, char*& at) {
     const Vec3& v = mesh.vertices[i];
-    put(out, static_cast<float>(v.x));
-    put(out, static_cast<float>(v.y));
-    put(out, static_cast<float>(v.z));
+    put(at, static_cast<float>(v.x));
+    put(at, static_cast<float>(v.y));
+    put(at, static_cast<float>(v.z));
     const auto& s = vertex_sum[i][3] > 0 ? vertex_sum[i] : back_sum[i];
-    for (int c = 0; c < 3; ++c) put<uint8_t>(out, srgb8(s[3] > 0 ? scale * s[c] / s[3] : 0.0));
-  }
-  for (size_t f = 0; f < faces.size(); ++f) {
+    for (int c = 0; c < 3; ++c) put<uint8_t>(at, srgb8(s[3] > 0 ? scale * s[c] / s[3] : 0.0));
+  });
+  const auto corners = [&](size_t f) { return mesh.patches[mesh.face_patch[f]].is_triangle() ? 3 : 4; };
+  // A face: its corner count and corners, 10 floats, 2 ints, 3 colour bytes.
+  write_records(out, faces.size(), [&](size_t f) { return size_t{1 + 40 + 8 + 3} + 4 * corners(f); },
+                [&](size_t f, char*& at) {
     const Patch& p = mesh.patches[mesh.face_patch[f]];
-    const int corners = p.is_triangle() ? 3 : 4;
-    put<uint8_t>(out, static_cast<uint8_t>(corners));
+    const int n = corners(f);
+    put<uint8_t>(at, static_cast<uint8_t>(n));
     // A back face lists its corners in reverse so its normal points its way.
-    for (int k = 0; k < corners; ++k) {
-      const int i = mesh.face_side[f] ? corners - 1 - k : k;
-      put<int32_t>(out, static_cast<int32_t>(p.v[i]));
+    for (int k = 0; k < n; ++k) {
+      const int i = mesh.face_side[f] ? n - 1 - k : k;
+      put<int32_t>(at, static_cast<int32_t>(p.v[i]));
     }
-    put(out, static_cast<float>(p.area));
-    for (double v : faces[f].rho) put(out, static_cast<float>(v));
-    for (double v : faces[f].exitance) put(out, static_cast<float>(v));
-    for (double v : faces[f].radiosity) put(out, static_cast<float>(v));
-    put<int32_t>(out, p.polygon);
-    put<int32_t>(out, p.object);
-    for (double v : faces[f].radiosity) put<uint8_t>(out, srgb8(scale * v));
-  }
+    put(at, static_cast<float>(p.area));
+    for (double v : faces[f].rho) put(at, static_cast<float>(v));
+    for (double v : faces[f].exitance) put(at, static_cast<float>(v));
+    for (double v : faces[f].radiosity) put(at, static_cast<float>(v));
+    put<int32_t>(at, p.polygon);
+    put<int32_t>(at, p.object);
+    for (double v : faces[f].radiosity) put<uint8_t>(at, srgb8(scale * v));
+  });
   file.commit();
 }
 

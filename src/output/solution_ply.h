@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <vector>
 
@@ -15,6 +16,10 @@ namespace mpath {
 struct SolutionFace {
   Rgb rho, exitance, radiosity;
 };
+
+// The sRGB byte of a linear value in [0, 1] (clamped) that solution.ply's
+// colours use: round(255 * sRGB transfer(v)).
+uint8_t display_srgb8(double linear);
 
 // `faces` in mesh face order.
 void write_solution_ply(const std::filesystem::path& path, const PatchMesh& mesh, const std::vector<SolutionFace>& faces);

@@ -1,5 +1,7 @@
 #include "tracer.h"
 
+#include <chrono>
+
 #include <algorithm>
 #include <cmath>
 
@@ -265,6 +267,15 @@ void Tracer::all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector
       h.traced = h.patch;
       h.patch = global(h.patch);
     }
+}
+
+const Tracer& TracerOnDemand::get() const {
+  std::call_once(once_, [this] {
+    const auto start = std::chrono::steady_clock::now();
+    tracer_ = std::make_unique<Tracer>(mesh_);
+    seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  });
+  return *tracer_;
 }
 
 }  // namespace mpath

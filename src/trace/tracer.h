@@ -5,6 +5,8 @@
 
 #include <embree3/rtcore.h>
 
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -74,6 +76,24 @@ class Tracer {
   double hair_ = 0;      // a tiny fraction of the scene size
   double near_tie_ = 0;  // hits closer than this get distances in double precision
   bool any_invisible_ = false;  // some traced patch has an invisible back: nearest() passes it
+};
+
+// The mesh's Tracer, built at the first get() (from any thread; once): a
+// solve that traces nothing (a kept store's first shot read from the store,
+// no point lights, cameras or grids, every face carried by stored lines)
+// never builds Embree's BVH.
+class TracerOnDemand {
+ public:
+  explicit TracerOnDemand(const PatchMesh& mesh) : mesh_(mesh) {}
+  const Tracer& get() const;
+  bool built() const { return tracer_ != nullptr; }  // read once no get() can run beside it
+  double build_seconds() const { return seconds_; }   // 0 until built
+
+ private:
+  const PatchMesh& mesh_;
+  mutable std::once_flag once_;
+  mutable std::unique_ptr<Tracer> tracer_;
+  mutable double seconds_ = 0;
 };
 
 }  // namespace mpath
