@@ -5,7 +5,7 @@ scene, as in the trace benchmark), added to the trace benchmark's record of
 that scene with its share of Embree's raw all-hit rate.
 
 Each preprocess run follows a run of Embree's raw loop of its own (trace_bench
---repeats 1, the same lines) within seconds, and the share is the median of
+--raw-only --repeats 1, the same lines) within seconds, and the share is the median of
 these pairs' ratios: the host's speed drifts by a quarter over minutes, so a
 ratio of rates measured minutes apart (the raw loop's nine runs first, the
 preprocess after) says as much about the drift as about the preprocess."""
@@ -17,7 +17,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import ROOT, timed  # noqa: E402
+from bench_common import BIN, timed  # noqa: E402
 
 
 def main(config, record_path, lines, repeats=5):
@@ -27,11 +27,11 @@ def main(config, record_path, lines, repeats=5):
         store = os.path.join(work, "store")
         raw_out = os.path.join(work, "raw.json")
         for _ in range(repeats):
-            subprocess.run([os.path.join(ROOT, "build/bin/trace_bench"), config, "--lines", str(lines), "--repeats", "1",
-                            "--out", raw_out], check=True, stdout=subprocess.DEVNULL)
+            subprocess.run([os.path.join(BIN, "trace_bench"), config, "--lines", str(lines), "--repeats", "1",
+                            "--raw-only", "--out", raw_out], check=True, stdout=subprocess.DEVNULL)
             raw = json.load(open(raw_out))["raw_lines_per_s"]
             subprocess.run(["rm", "-rf", store], check=True)
-            wall, cpu = timed([[os.path.join(ROOT, "build/bin/mpath-preprocess"), config, "-q",
+            wall, cpu = timed([[os.path.join(BIN, "mpath-preprocess"), config, "-q",
                                 f"lines.total={lines}", "hierarchy.max_depth=0", f"store.dir={store}"]])
             stats = json.load(open(os.path.join(store, "preprocess.json")))
             # The box's own time: tracing, encoding, compressing and writing its
