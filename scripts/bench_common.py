@@ -8,6 +8,8 @@ import time
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 BIN = os.path.join(ROOT, "build", "bin")  # the programs scripts/build makes
+# RenderPark's office2 beside the clone (../shared), which configs/office2.toml reads.
+OFFICE2 = os.path.join(ROOT, "..", "shared", "scenes", "office2", "office2.mgf")
 
 
 def write_csv(name, rows):

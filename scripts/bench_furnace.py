@@ -6,10 +6,9 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
-from bench_common import write_csv  # noqa: E402
+from bench_common import BIN, ROOT, write_csv  # noqa: E402
 from solution import read_solution  # noqa: E402
 
-ROOT = os.path.join(os.path.dirname(__file__), "..")
 
 
 def run(work, rho, lines, sequence, mode, seed):
@@ -20,7 +19,7 @@ def run(work, rho, lines, sequence, mode, seed):
     with open(config, "w") as f:
         f.write('solver.method = "classic"\n')
     out = os.path.join(work, "out")
-    subprocess.check_call([os.path.join(ROOT, "build/bin/mpath-solve"), config, "-q", f"scene.file={stem}.obj",
+    subprocess.check_call([os.path.join(BIN, "mpath-solve"), config, "-q", f"scene.file={stem}.obj",
                            f"lines.total={lines}", f"lines.sequence={sequence}", f"first_shot.mode={mode}",
                            f"lines.seed={seed}", "first_shot.lines=1000000", f"output.dir={out}"])
     faces = read_solution(os.path.join(out, "solution.ply"))

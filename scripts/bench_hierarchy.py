@@ -16,9 +16,8 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import write_csv  # noqa: E402
+from bench_common import BIN, ROOT, write_csv  # noqa: E402
 
-ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
 OFFICE = os.path.join(ROOT, "configs", "office", "office.obj")
 
 
@@ -65,7 +64,7 @@ def main():
         scene = os.path.join(args.work, f"office{n}x{n}.obj")
         tile(n, scene)
         out = os.path.join(args.work, f"office{n}x{n}.json")
-        cmd = [os.path.join(ROOT, "build", "bin", "hierarchy_bench"), config, f"scene.file={scene}", "--out", out]
+        cmd = [os.path.join(BIN, "hierarchy_bench"), config, f"scene.file={scene}", "--out", out]
         if n <= args.all_pairs_up_to:
             cmd.append("--all-pairs")
         subprocess.check_call(cmd)

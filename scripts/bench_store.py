@@ -8,14 +8,12 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import write_csv  # noqa: E402
-
-ROOT = os.path.join(os.path.dirname(__file__), "..")
+from bench_common import BIN, OFFICE2, ROOT, write_csv  # noqa: E402
 
 
 def main(work, sizes):
     config = os.path.join(ROOT, "configs/office2.toml")
-    if not os.path.exists(os.path.join(ROOT, "../shared/scenes/office2/office2.mgf")):
+    if not os.path.exists(OFFICE2):
         config = os.path.join(ROOT, "configs/cornell_box.toml")
     rows = []
     for lines in sizes:
@@ -23,10 +21,10 @@ def main(work, sizes):
         out = os.path.join(work, "out")
         subprocess.run(["rm", "-rf", store, out], check=True)
         common = [f"lines.total={lines}", f"store.dir={store}"]
-        p = subprocess.run([os.path.join(ROOT, "build/bin/mpath-preprocess"), config, "--log-level", "info"] + common,
+        p = subprocess.run([os.path.join(BIN, "mpath-preprocess"), config, "--log-level", "info"] + common,
                            capture_output=True, text=True, check=True)
         stats = json.load(open(os.path.join(store, "preprocess.json")))
-        subprocess.run([os.path.join(ROOT, "build/bin/mpath-solve"), config, "-q", "solver.method=multipath",
+        subprocess.run([os.path.join(BIN, "mpath-solve"), config, "-q", "solver.method=multipath",
                         "solver.iterations=1", "first_shot.lines=10000", f"output.dir={out}", "output.exr=false",
                         "output.png=false"] + common, check=True)
         report = json.load(open(os.path.join(out, "report.json")))

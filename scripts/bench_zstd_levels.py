@@ -11,7 +11,7 @@ import statistics
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_common import BIN, ROOT, timed, write_csv  # noqa: E402
+from bench_common import BIN, OFFICE2, ROOT, timed, write_csv  # noqa: E402
 
 SCENES = [("ROOM", "configs/room.toml"), ("BIG ROOM", "configs/bigroom.toml"), ("OFFICE", "configs/office.toml"),
           ("office2", "configs/office2.toml")]
@@ -27,7 +27,7 @@ def main():
     levels = [int(x) for x in args.levels.split(",")]
     rows = []
     for name, config in SCENES:
-        if name == "office2" and not os.path.exists(os.path.join(ROOT, "../shared/scenes/office2/office2.mgf")):
+        if name == "office2" and not os.path.exists(OFFICE2):
             continue
         config = os.path.join(ROOT, config)
         runs = {lv: [] for lv in levels}
