@@ -118,7 +118,9 @@ inline constexpr size_t kLinesAhead = 4;
 // adaptive pass takes the first of them, a random subset of the chunk), its
 // chunk read and decoded straight into that order (BoxStore::read_lines:
 // a pass then reads its lines' events one after another in memory) and
-// checked (`check(lines, c)`, which throws on a damaged one), and the lines
+// checked (`check(lines, c)`, which throws on a damaged one, and may
+// rewrite the events' fields for the transport: the lines are the thread's
+// own copy), and the lines
 // run: `line(lines, k)` for k = 0, 1, ..., after `ahead(lines, k + d, d)`
 // for the lines d = 1 .. kLinesAhead places after it. (Taking the chunk's
 // first lines instead, and decoding only them, raised the furnace error at

@@ -35,6 +35,25 @@ void check_chunk(const StoreBox& box, const linestore::DecodedChunk& chunk, int 
                                    "foreign store); run mpath-preprocess again", x, c));
 }
 
+// A line-set pass reads a crossing's faces from its event: once a chunk is
+// decoded and checked, each patch event's AR fields (which only child-box
+// events use) are given the faces it turns towards along the line and
+// against it (face_towards), looked up for the whole chunk at once (loads
+// independent of one another), so that a line's transport and its
+// prefetches start from the faces instead of waiting for each patch's
+// record first. The chunk is the thread's own decoded copy.
+void chunk_faces(const StoreBox& box, linestore::DecodedChunk& chunk, int x, uint64_t c) {
+  check_chunk(box, chunk, x, c);
+  for (Event& e : chunk.events) {
+    const auto& f = box.local_faces[e.id];
+    e.entry_ar = static_cast<uint32_t>(e.along ? f[0] : f[1]);
+    e.exit_ar = static_cast<uint32_t>(e.along ? f[1] : f[0]);
+  }
+}
+
+// face_towards(box, e, dir) of an event chunk_faces went over.
+inline int towards(const Event& e, int dir) { return static_cast<int>(dir > 0 ? e.entry_ar : e.exit_ar); }
+
 // Per slot: what the lines of the slot's own box do at the face, and the
 // crossings of every carrier of the slot's class.
 struct SlotCounts {
@@ -214,28 +233,27 @@ struct PassContext {
 
 // Brings into the caches what transport_set_line will touch for a line
 // `distance` lines ahead, in stages that each read what an earlier one
-// brought: its patches' faces (4 lines ahead), the faces' records (2), their
-// first entries' records (1). (Measured on OFFICE: 3/2/1 and 6/3/1 were no
-// faster.)
+// brought: the faces' records and the patches' (4 lines ahead; the faces
+// come with the events, chunk_faces), their first entries' records (2). (Measured on OFFICE before
+// the faces came with the events, starting from the patches' records 4
+// ahead: 3/2/1 and 6/3/1 were no faster.)
 void prefetch_set_line(const PassContext& in, const SetShard& shard, const Event* ev, int n, size_t distance) {
-  const auto& local = in.box->local_faces;
   switch (distance) {
     case 4:
-      for (int i = 0; i < n; ++i) prefetch(&local[ev[i].id]);
-      break;
-    case 2:
-      for (int i = 0; i < n; ++i)
-        for (const int face : local[ev[i].id])
+      for (int i = 0; i < n; ++i) {
+        prefetch(&in.box->local_faces[ev[i].id]);  // its contact plane (touching)
+        for (const int face : {towards(ev[i], +1), towards(ev[i], -1)})
           if (face >= 0) {
             prefetch(&in.faces[face]);
             const char* acc = reinterpret_cast<const char*>(&shard.faces[face]);
             prefetch(acc);
             prefetch(acc + sizeof(FaceAcc) - 1);
           }
+      }
       break;
-    case 1:
+    case 2:
       for (int i = 0; i < n; ++i)
-        for (const int face : local[ev[i].id])
+        for (const int face : {towards(ev[i], +1), towards(ev[i], -1)})
           if (face >= 0) {
             const FaceIn& f = in.faces[face];
             prefetch(&in.entries[f.entry]);
@@ -258,13 +276,13 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
   const LineSets& sets = *in.sets;
   auto& sends = shard.sends;
   sends.clear();
-  const auto towards = [&](int j, int d) { return face_towards(box, ev[j], d); };
+  const auto face_at = [&](int j, int d) { return towards(ev[j], d); };
   for (int i = 0; i < n; ++i)
     for (const int dir : {+1, -1}) {
-      const int face = face_towards(box, ev[i], dir);
+      const int face = towards(ev[i], dir);
       if (face < 0) continue;
       const FaceIn& from = in.faces[face];
-      const int j = next_seen(i, dir, n, towards);
+      const int j = next_seen(i, dir, n, face_at);
       // A face of the box's own (one class here) needs no look-up of its partner's box.
       const int k = from.single() ? (in.root || (j >= 0 && j < n) ? 0 : -1)
                                       : pair_class(sets, lines, in.root, ev, n, i, j);
@@ -297,7 +315,7 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       for (int c = 0; c < ch; ++c) shard.escaped[c] += s.power[c];
       continue;
     }
-    const int face = face_towards(box, ev[j], -s.dir);  // turned towards the power
+    const int face = towards(ev[j], -s.dir);  // turned towards the power
     if (face < 0) {
       for (int c = 0; c < ch; ++c) shard.absorbed[c] += s.power[c];
       continue;
@@ -417,7 +435,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
     stream_pass_lines(
         store, x, parts, lo, hi, pass, progress,
-        [&](const linestore::DecodedChunk& chunk, uint64_t c) { check_chunk(box, chunk, x, c); },
+        [&](linestore::DecodedChunk& chunk, uint64_t c) { chunk_faces(box, chunk, x, c); },
         [&](const linestore::DecodedChunk& chunk, uint32_t l) {
           const Event* ev = chunk.events.data() + chunk.first[l];
           const int m = static_cast<int>(chunk.first[l + 1] - chunk.first[l]);
