@@ -458,8 +458,8 @@ Remaining remaining_power(const BoxStore& store, const RadiosityState& state) {
   return r;
 }
 
-uint64_t shoot_uncarried(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store, RadiosityState& state,
-                         unsigned pass, unsigned long long seed, int shards_wanted) {
+uint64_t shoot_uncarried(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store,
+                         RadiosityState& state, unsigned pass, unsigned long long seed, int shards_wanted) {
   const int ch = state.channels;
   std::vector<int> faces;
   for (size_t b = 0; b < store.box_count(); ++b) {
@@ -475,8 +475,8 @@ uint64_t shoot_uncarried(const PatchMesh& mesh, const TracerOnDemand& tracer, co
   return shoot_unshot(mesh, tracer, faces, state, pass, seed, shards_wanted);
 }
 
-uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::vector<int> faces, RadiosityState& state,
-                      unsigned pass, unsigned long long seed, int shards_wanted) {
+uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::vector<int> faces,
+                      RadiosityState& state, unsigned pass, unsigned long long seed, int shards_wanted) {
   const int ch = state.channels;
   if (faces.empty()) return 0;
   std::sort(faces.begin(), faces.end());
@@ -504,9 +504,9 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::
   return faces.size() * kUncarriedLines;
 }
 
-PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store,
-                           RadiosityState& state, const IterationLog& log, unsigned pass, int shards_wanted,
-                           std::vector<BoxPassStats>* per_box, uint64_t* uncarried) {
+PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer,
+                           const BoxStore& store, RadiosityState& state, const IterationLog& log, unsigned pass,
+                           int shards_wanted, std::vector<BoxPassStats>* per_box, uint64_t* uncarried) {
   if (const LineSets* sets = store.line_sets())
     return line_set_iteration(mesh, tracer, store, *sets, state, pass, shards_wanted, line_power(options, store, log),
                               options.lines.seed, per_box, uncarried);

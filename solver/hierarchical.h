@@ -56,18 +56,19 @@ Remaining remaining_power(const BoxStore& store, const RadiosityState& state);
 // per face, like the first shot, so that it moves on instead of waiting;
 // returns the local lines cast. Run after each iteration.
 inline constexpr int kUncarriedLines = 16;
-uint64_t shoot_uncarried(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store, RadiosityState& state,
-                         unsigned pass, unsigned long long seed, int shards_wanted);
+uint64_t shoot_uncarried(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store,
+                         RadiosityState& state, unsigned pass, unsigned long long seed, int shards_wanted);
 // The unshot power of `faces` shot with kUncarriedLines local lines each.
-uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::vector<int> faces, RadiosityState& state,
-                      unsigned pass, unsigned long long seed, int shards_wanted);
+uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::vector<int> faces,
+                      RadiosityState& state, unsigned pass, unsigned long long seed, int shards_wanted);
 
 // One iteration of mpath-solve's stored-line methods with the options'
 // schedule and line power: hierarchical_iteration, then shoot_uncarried
 // (its local lines added to `uncarried` when given).
-PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store,
-                           RadiosityState& state, const IterationLog& log, unsigned pass, int shards_wanted,
-                           std::vector<BoxPassStats>* per_box = nullptr, uint64_t* uncarried = nullptr);
+PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer,
+                           const BoxStore& store, RadiosityState& state, const IterationLog& log, unsigned pass,
+                           int shards_wanted, std::vector<BoxPassStats>* per_box = nullptr,
+                           uint64_t* uncarried = nullptr);
 
 // The order in which pass `pass` takes the n lines of chunk `chunk` of box
 // `box`: a pseudo-random permutation, new every pass. Chunks are stored sorted

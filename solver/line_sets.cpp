@@ -234,9 +234,10 @@ struct PassContext {
 // Brings into the caches what transport_set_line will touch for a line
 // `distance` lines ahead, in stages that each read what an earlier one
 // brought: the faces' records and the patches' (4 lines ahead; the faces
-// come with the events, chunk_faces), their first entries' records (2). (Measured on OFFICE before
-// the faces came with the events, starting from the patches' records 4
-// ahead: 3/2/1 and 6/3/1 were no faster.)
+// come with the events, chunk_faces), their first entries' records (2).
+// (Measured on OFFICE before the faces came with the events, when a line's
+// patches were brought 4 lines ahead, their faces 2 and the entries 1:
+// 3/2/1 and 6/3/1 were no faster.)
 void prefetch_set_line(const PassContext& in, const SetShard& shard, const Event* ev, int n, size_t distance) {
   switch (distance) {
     case 4:
@@ -533,9 +534,10 @@ void plan_iteration(const BoxStore& store, const LineSets& sets, const Radiosity
   for (size_t s = 0; s < sets.slots(); ++s) flight.share[s] = taken[s] > 0 ? 1.0 / taken[s] : 0.0;
 }
 
-PassStats line_set_iteration(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store, const LineSets& sets,
-                             RadiosityState& state, unsigned pass, int shards_wanted, double power_per_line,
-                             unsigned long long seed, std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines) {
+PassStats line_set_iteration(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store,
+                             const LineSets& sets, RadiosityState& state, unsigned pass, int shards_wanted,
+                             double power_per_line, unsigned long long seed, std::vector<BoxPassStats>* per_box,
+                             uint64_t* uncarried_lines) {
   const auto start = std::chrono::steady_clock::now();
   const Hierarchy& h = store.hierarchy();
   const int ch = state.channels;

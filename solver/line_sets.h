@@ -58,8 +58,9 @@ LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh);
 // lines alone), a crossing's
 // share of its class scaled so that the carriers' expected shares add up to
 // one, none sending more than its expected part.
-PassStats line_set_iteration(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store, const LineSets& sets,
-                             RadiosityState& state, unsigned pass, int shards_wanted, double power_per_line,
-                             unsigned long long seed, std::vector<BoxPassStats>* per_box, uint64_t* uncarried_lines);
+PassStats line_set_iteration(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store,
+                             const LineSets& sets, RadiosityState& state, unsigned pass, int shards_wanted,
+                             double power_per_line, unsigned long long seed, std::vector<BoxPassStats>* per_box,
+                             uint64_t* uncarried_lines);
 
 }  // namespace mpath

@@ -98,8 +98,8 @@ void run_iterations(const Options& options, const PatchMesh& mesh, const TracerO
             }, save);
   } else {
     iterate(options, state, log, [&](unsigned pass) {
-      return classic_pass(mesh, tracer.get(), state, classic_pass_lines(options, mesh, log, state), options.lines.seed, pass,
-                          options.solver.shards, options.lines.sequence);
+      return classic_pass(mesh, tracer.get(), state, classic_pass_lines(options, mesh, log, state), options.lines.seed,
+                          pass, options.solver.shards, options.lines.sequence);
     }, save);
   }
   record.timings.iterations = seconds_since(start);

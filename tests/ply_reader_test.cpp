@@ -220,7 +220,8 @@ TEST(SolutionPly, ColourTableGivesTheTransferFunctionsCodes) {
   for (int i = 0; i < 1000000; ++i) values.push_back(std::pow(uniform(rng), 3.0));
   int wrong = 0;
   for (const double v : values)
-    if (display_srgb8(v) != direct(v) && ++wrong <= 5) ADD_FAILURE() << "linear " << v << ": " << +display_srgb8(v) << ", not " << direct(v);
+    if (display_srgb8(v) != direct(v) && ++wrong <= 5)
+      ADD_FAILURE() << "linear " << v << ": " << +display_srgb8(v) << ", not " << direct(v);
   EXPECT_EQ(wrong, 0);
 }
 

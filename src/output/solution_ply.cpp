@@ -54,7 +54,7 @@ class Srgb8 {
     }
   }
   uint8_t operator()(double linear) const {
-    if (!(linear > 0.0)) return 0;  // NaN never reaches here (checked before writing)
+    if (!(linear > 0.0)) return 0;  // and 0 for a NaN (solution.ply never has one: checked before writing)
     return static_cast<uint8_t>(std::upper_bound(step_.begin(), step_.end(), linear) - step_.begin());
   }
 
