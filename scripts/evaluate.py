@@ -793,7 +793,15 @@ from this run's CSVs; what follows explains them, from the profiles in
   (its ceiling strips light the whole room; no subscene holds more of the
   error than its lines would buy: "pilot budget: 100.0 % of the lines in
   the root") and the store is a stored Multipath store; BIG ROOM's pilot
-  keeps 89 % in the root. A kept-store solve reads its first shot from the
+  keeps 89 % in the root. Both sides trace near Embree's limit: on office2
+  classic's passes ran at 85 % of Embree's raw all-hit rate and the
+  preprocess at 83 % (docs/performance.md, the limit benchmark), and at 4M
+  lines classic's first pass took 1.08 s for its 4M lines where the
+  preprocess's box took 1.15 s for the same count (2 threads, December
+  2026). What a first run saves is the lines classic casts after its first
+  pass (1.6M more on office2 at 4M, 40 %) and what a lower error at equal
+  lines buys; on office2, where the error ratio is about 1, that is not
+  1.5x. A kept-store solve reads its first shot from the
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is the
   transport loop over the stored lines and little else; on office2 that
   loop is stored Multipath's (one box), and its kept-store solve reaches 5x
