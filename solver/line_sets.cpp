@@ -28,23 +28,19 @@ inline int pair_class(const LineSets& sets, const LineSetBox& lines, bool root, 
 }
 
 
-void check_chunk(const StoreBox& box, const linestore::DecodedChunk& chunk, int x, uint64_t c) {
-  for (const Event& e : chunk.events)
-    if (e.kind != Event::patch || e.id >= box.local_faces.size())
-      throw InputError(fmt::format("store: box {} chunk {} names patches the box does not have (damaged or "
-                                   "foreign store); run mpath-preprocess again", x, c));
-}
-
-// A line-set pass reads a crossing's faces from its event: once a chunk is
-// decoded and checked, each patch event's AR fields (which only child-box
-// events use) are given the faces it turns towards along the line and
-// against it (face_towards), looked up for the whole chunk at once (loads
+// Checks a decoded chunk's events (patches of the box only; throws naming
+// the chunk otherwise) and gives each its faces for a line-set pass: once a
+// chunk is decoded, each patch event's AR fields (which only child-box
+// events use) take the faces it turns towards along the line and against
+// it (face_towards), looked up for the whole chunk at once (loads
 // independent of one another), so that a line's transport and its
 // prefetches start from the faces instead of waiting for each patch's
 // record first. The chunk is the thread's own decoded copy.
 void chunk_faces(const StoreBox& box, linestore::DecodedChunk& chunk, int x, uint64_t c) {
-  check_chunk(box, chunk, x, c);
   for (Event& e : chunk.events) {
+    if (e.kind != Event::patch || e.id >= box.local_faces.size())
+      throw InputError(fmt::format("store: box {} chunk {} names patches the box does not have (damaged or "
+                                   "foreign store); run mpath-preprocess again", x, c));
     const auto& f = box.local_faces[e.id];
     e.entry_ar = static_cast<uint32_t>(e.along ? f[0] : f[1]);
     e.exit_ar = static_cast<uint32_t>(e.along ? f[1] : f[0]);

@@ -153,14 +153,13 @@ void write_solution_ply(const std::filesystem::path& path, const PatchMesh& mesh
     out << "property float " << name << "\n";
   out << "property int polygon\nproperty int object\n"
       << "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
-  const auto srgb8 = display_srgb8;
   write_records(out, mesh.vertices.size(), [](size_t) { return size_t{15}; }, [&](size_t i, char*& at) {
     const Vec3& v = mesh.vertices[i];
     put(at, static_cast<float>(v.x));
     put(at, static_cast<float>(v.y));
     put(at, static_cast<float>(v.z));
     const auto& s = vertex_sum[i][3] > 0 ? vertex_sum[i] : back_sum[i];
-    for (int c = 0; c < 3; ++c) put<uint8_t>(at, srgb8(s[3] > 0 ? scale * s[c] / s[3] : 0.0));
+    for (int c = 0; c < 3; ++c) put<uint8_t>(at, display_srgb8(s[3] > 0 ? scale * s[c] / s[3] : 0.0));
   });
   const auto corners = [&](size_t f) { return mesh.patches[mesh.face_patch[f]].is_triangle() ? 3 : 4; };
   // A face: its corner count and corners, 10 floats, 2 ints, 3 colour bytes.
@@ -180,7 +179,7 @@ void write_solution_ply(const std::filesystem::path& path, const PatchMesh& mesh
     for (double v : faces[f].radiosity) put(at, static_cast<float>(v));
     put<int32_t>(at, p.polygon);
     put<int32_t>(at, p.object);
-    for (double v : faces[f].radiosity) put<uint8_t>(at, srgb8(scale * v));
+    for (double v : faces[f].radiosity) put<uint8_t>(at, display_srgb8(scale * v));
   });
   file.commit();
 }

@@ -86,8 +86,7 @@ class TracerOnDemand {
  public:
   explicit TracerOnDemand(const PatchMesh& mesh) : mesh_(mesh) {}
   const Tracer& get() const;
-  bool built() const { return tracer_ != nullptr; }  // read once no get() can run beside it
-  double build_seconds() const { return seconds_; }   // 0 until built
+  double build_seconds() const { return seconds_; }  // 0 until built
 
  private:
   const PatchMesh& mesh_;
