@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 
@@ -369,14 +370,14 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   const int ch = state.channels;
   const uint32_t entries = lines.entry.back();
   // This box's own class at every face it sees (the face's last entry) takes off now.
-  for (size_t f = 0; f + 1 < lines.entry.size(); ++f) {
+  for_each_record(lines.entry.size() - 1, [&](size_t f) {
     const uint32_t slot = lines.slot[lines.entry[f + 1] - 1];
     for (int c = 0; c < ch; ++c) {
       flight.quota[size_t{slot} * ch + c] = state.pooled[size_t{slot} * ch + c];
       state.pooled[size_t{slot} * ch + c] = 0;
     }
     flight.used[slot] = 0;
-  }
+  });
   const std::vector<ChunkPart>& parts = flight.parts[x];
   SetResult result;
   if (parts.empty()) return result;  // the boxes above carry this box's classes in this pass
@@ -384,22 +385,23 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   PassContext in{&box, &lines, &sets, {}, {}, x == 0, !every_line};
   const size_t faces = box.face_global.size();
   in.entries.resize(entries);
-  for (uint32_t e = 0; e < entries; ++e) {
+  for_each_record(entries, [&](size_t e) {
     EntryInput& input = in.entries[e];
     const uint32_t slot = lines.slot[e];
     for (int c = 0; c < ch; ++c) input.quota[c] = flight.quota[size_t{slot} * ch + c];
     input.share = flight.share[slot];
-  }
+  });
   // A part of the lines: each shard may send at most its part of an entry's expected share.
   std::vector<double> expected;
   if (in.capped) {
     expected.resize(entries);
-    for (uint32_t e = 0; e < entries; ++e)
+    for_each_record(entries, [&](size_t e) {
       expected[e] = flight.fraction[x] * lines.carried[e] * flight.share[lines.slot[e]];
+    });
   }
   in.faces.resize(faces);
-  bool waits = false;  // some face keeps a part of what it receives for the classes of boxes above
-  for (size_t f = 0; f < faces; ++f) {
+  std::atomic<bool> waits = false;  // some face keeps a part of what it receives for the classes of boxes above
+  for_each_record(faces, [&](size_t f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
     FaceIn& face = in.faces[f];
     for (int c = 0; c < ch; ++c) face.rho[c] = state.rho[state.at(g, c)];
@@ -411,8 +413,8 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
       for (uint32_t k = 0; k < carried; ++k) share += sets.alpha[sets.face_slot[g] + k];
     }
     face.signed_share = static_cast<float>(carried == 1 ? -share : share);
-    waits |= face.carried_share() < 1;
-  }
+    if (face.carried_share() < 1) waits.store(true, std::memory_order_relaxed);
+  });
   const uint64_t chunks = parts.size();
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(shards_wanted, chunks)));
@@ -445,8 +447,8 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   });
   // Merge in shard order: the quota sent; what was gathered and not sent
   // goes to the pools of the classes this box carries, what waits for the
-  // boxes above to theirs.
-  for (size_t f = 0; f < faces; ++f) {
+  // boxes above to theirs. Faces write only their own slots: in parallel.
+  for_each_record(faces, [&](size_t f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
     const uint32_t carried = lines.entry[f + 1] - lines.entry[f];
     for (uint32_t k = 0; k < carried; ++k) {
@@ -463,7 +465,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
       if (gathered != 0) pool_classes(sets, g, 0, static_cast<int>(carried), ch, c, gathered, state.pooled);
       if (later != 0) pool_classes(sets, g, carried, -1, ch, c, later, state.pooled);
     }
-  }
+  });
   for (const SetShard& a : acc) {
     for (int c = 0; c < ch; ++c) {
       result.absorbed[c] += a.absorbed[c];
@@ -482,15 +484,15 @@ void assign_unshot(const LineSets& sets, RadiosityState& state) {
   const int ch = state.channels;
   std::vector<bool> uncarried(state.faces, false);
   for (int f : sets.uncarried) uncarried[f] = true;
-  for (size_t f = 0; f < state.faces; ++f) {
-    if (uncarried[f]) continue;
+  for_each_record(state.faces, [&](size_t f) {
+    if (uncarried[f]) return;
     for (int c = 0; c < ch; ++c) {
       double& u = state.unshot[state.at(f, c)];
       if (u == 0) continue;
       pool_classes(sets, f, 0, -1, ch, c, u, state.pooled);
       u = 0;
     }
-  }
+  });
 }
 
 }  // namespace
@@ -571,8 +573,9 @@ PassStats line_set_iteration(const PatchMesh& mesh, const TracerOnDemand& tracer
   }
   progress.finish();
   // What no crossing took (a class whose carriers lost lines to damage; rounding) goes back to its pool.
-  for (size_t s = 0; s < sets.slots(); ++s)
+  for_each_record(sets.slots(), [&](size_t s) {
     for (int c = 0; c < ch; ++c) state.pooled[s * ch + c] += flight.quota[s * ch + c] * (1.0 - flight.used[s]);
+  });
   std::vector<int> waiting;
   for (int f : sets.uncarried)
     for (int c = 0; c < ch; ++c)

@@ -135,12 +135,13 @@ namespace {
 // Adds gathered power and Phi gains of every shard, and the energy terms.
 void merge_gains(const std::vector<ShardAccumulator>& acc, RadiosityState& state) {
   const int ch = state.channels;
-  for (size_t f = 0; f < state.faces; ++f)
+  for_each_record(state.faces, [&](size_t f) {
     for (const ShardAccumulator& a : acc)
       for (int c = 0; c < ch; ++c) {
         state.unshot[state.at(f, c)] += a.faces[f].gathered[c];
         state.phi[state.at(f, c)] += a.faces[f].phi_gain[c];
       }
+  });
   for (const ShardAccumulator& a : acc)
     for (int c = 0; c < ch; ++c) {
       state.energy.absorbed[c] += a.absorbed[c];
@@ -151,11 +152,11 @@ void merge_gains(const std::vector<ShardAccumulator>& acc, RadiosityState& state
 }  // namespace
 
 void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, RadiosityState& state) {
-  for (size_t f = 0; f < state.faces; ++f) {
+  for_each_record(state.faces, [&](size_t f) {
     double unsent = 1.0;  // fraction of the quota no line took
     for (const ShardAccumulator& a : acc) unsent -= a.faces[f].quota_used;
     for (int c = 0; c < state.channels; ++c) state.unshot[state.at(f, c)] = in.faces[f].quota[c] * unsent;
-  }
+  });
   merge_gains(acc, state);
 }
 

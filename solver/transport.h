@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
@@ -90,6 +91,19 @@ template <typename F>
 void for_each_shard(int shards, const F& f) {
   tbb::task_group_context context(tbb::task_group_context::isolated);
   tbb::parallel_for(0, shards, f, context);
+}
+
+// f(i) for i in [0, n) on the threads, in blocks: the per-face loops around
+// a pass (its inputs, the merge of its shards) each write only element i's
+// own records, so that the result is the same on any number of threads. Run
+// one after another they were the serial part of every pass (on OFFICE's
+// root box 5-7 ms a pass to merge 8 shards of 86,662 faces, a tenth of an
+// adaptive pass on two threads).
+template <typename F>
+void for_each_record(size_t n, const F& f) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) f(i);
+  });
 }
 
 // Runs a pass's shards, one per accumulator in `acc`: reset(s) for every
