@@ -1,10 +1,5 @@
 #include "line_record.h"
 
-#include <bit>
-#include <cstddef>
-#include <cstring>
-
-#include "prefetch.h"
 #include "varint.h"
 #include "zstd_frame.h"
 
@@ -190,25 +185,8 @@ bool walk_lines(const unsigned char* data, const Streams& s, uint64_t lines, uin
   return true;
 }
 
-// An event written as two 8-byte words: the second walk writes its lines'
-// events at their places in the pass's random order, each most often to a
-// cache line not in the core's caches, and an event built field by field
-// took five stores (the store queue, not the decoding, was what the walk
-// waited on). `flags`: kind << 1 | along, as coded.
-[[gnu::always_inline]] inline void store_event(Event* to, uint32_t id, uint32_t entry_ar, uint32_t exit_ar,
-                                               uint64_t flags) {
-  static_assert(offsetof(Event, id) == 0 && offsetof(Event, entry_ar) == 4 && offsetof(Event, exit_ar) == 8 &&
-                offsetof(Event, kind) == 12 && offsetof(Event, along) == 13 && sizeof(Event::Kind) == 1 &&
-                std::endian::native == std::endian::little);
-  const uint64_t words[2] = {id | static_cast<uint64_t>(entry_ar) << 32,
-                             exit_ar | (flags >> 1) << 32 | (flags & 1) << 40};
-  std::memcpy(static_cast<void*>(to), words, sizeof words);
-}
-
 // The second walk, over both streams: line i's events are decoded and
 // checked, and written from out.events[at(i)] on (at(i) = kDropped: not kept).
-constexpr uint64_t kWriteAhead = 12;
-
 template <typename At>
 bool walk_events(const unsigned char* data, size_t size, const Streams& s, uint64_t lines, const At& at,
                  DecodedChunk& out) {
@@ -220,10 +198,6 @@ bool walk_events(const unsigned char* data, size_t size, const Streams& s, uint6
     get_head(data, s.line_end, lp, count, entry, exit);  // read and checked by walk_lines
     const uint32_t where = at(i);
     Event* to = where == kDropped ? nullptr : out.events.data() + where;
-    if (i + kWriteAhead < lines) {
-      const uint32_t later = at(i + kWriteAhead);
-      if (later != kDropped && later < out.events.size()) prefetch_write(out.events.data() + later);
-    }
     uint32_t previous_id = 0;
     for (uint64_t j = 0; j < count; ++j) {
       uint64_t code;
@@ -240,9 +214,13 @@ bool walk_events(const unsigned char* data, size_t size, const Streams& s, uint6
       }
       if (id < 0 || id > 0xFFFFFFFFll) return false;
       previous_id = static_cast<uint32_t>(id);
-      uint32_t entry_ar = kNoAr, exit_ar = kNoAr;
-      if ((code & 2) && (!get_ar(data, size, ep, entry_ar) || !get_ar(data, size, ep, exit_ar))) return false;
-      if (to) store_event(to++, previous_id, entry_ar, exit_ar, code & 3);
+      Event e;
+      e.id = previous_id;
+      e.kind = (code & 2) ? Event::child_box : Event::patch;
+      e.along = code & 1;
+      if (e.kind == Event::child_box && (!get_ar(data, size, ep, e.entry_ar) || !get_ar(data, size, ep, e.exit_ar)))
+        return false;
+      if (to) *to++ = e;
     }
   }
   return ep == size;

@@ -15,14 +15,4 @@ inline void prefetch(const void* p) {
 #endif
 }
 
-// The same for a line about to be written: it arrives owned by the core (a
-// core without the instruction takes it as a no-op).
-inline void prefetch_write(const void* p) {
-#if defined(__x86_64__)
-  asm volatile("prefetchw %0" : : "m"(*static_cast<const char*>(p)));
-#else
-  __builtin_prefetch(p, 1);
-#endif
-}
-
 }  // namespace mpath
