@@ -804,11 +804,13 @@ from this run's CSVs; what follows explains them, from the profiles in
   1.5x. A kept-store solve reads its first shot from the
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is the
   transport loop over the stored lines and little else; on office2 that
-  loop is stored Multipath's (one box), and its kept-store solve reaches 5x
-  since the passes decode each chunk straight into their order and the
+  loop is stored Multipath's (one box), and its kept-store solve is near
+  5x since the passes decode each chunk straight into their order and the
   programs ask for huge pages (docs/performance.md: office2's kept-store
   solve 0.286 -> 0.252 s from the huge pages alone, its page faults
-  halved). These times include each program's start-up (about 0.03 s with
+  halved): above it in some runs, just below it in others (4.98x at
+  5587443, 5.22x at 6e74079), as the host's speed moves classic's solves
+  and the short hierarchical ones unequally. These times include each program's start-up (about 0.03 s with
   the exec that asks for huge pages): at 1M lines that is a sixth of
   office2's kept-store solve.
 """
