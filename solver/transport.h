@@ -98,12 +98,17 @@ void for_each_shard(int shards, const F& f) {
 // own records, so that the result is the same on any number of threads. Run
 // one after another they were the serial part of every pass (on OFFICE's
 // root box 5-7 ms a pass to merge 8 shards of 86,662 faces, a tenth of an
-// adaptive pass on two threads).
+// adaptive pass on two threads). In a task context of its own, as
+// for_each_shard: a failing sibling box does not leave a merge half done.
 template <typename F>
 void for_each_record(size_t n, const F& f) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) f(i);
-  });
+  tbb::task_group_context context(tbb::task_group_context::isolated);
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, n, 4096),
+      [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) f(i);
+      },
+      context);
 }
 
 // Runs a pass's shards, one per accumulator in `acc`: reset(s) for every
