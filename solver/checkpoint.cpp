@@ -7,7 +7,6 @@
 #include "atomic_file.h"
 #include "error.h"
 #include "hash.h"
-#include "store_identity.h"
 
 namespace mpath {
 
@@ -91,7 +90,7 @@ class Reader {
 
 }  // namespace
 
-std::string checkpoint_key(const Options& options, const PatchMesh& mesh) {
+std::string checkpoint_key(const Options& options, const std::string& geometry) {
   Options o = options;
   o.solver.iterations = 0;
   o.solver.tolerance = 0;
@@ -107,7 +106,7 @@ std::string checkpoint_key(const Options& options, const PatchMesh& mesh) {
   Fnv1a h;
   h.add(options_to_toml(o));
   h.add(hash_file(options.scene.file));
-  h.add(mesh_hash(mesh));
+  h.add(geometry);
   return hex64(h.value());
 }
 

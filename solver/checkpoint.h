@@ -15,7 +15,10 @@ namespace mpath {
 
 // Everything a solve's state depends on, hashed: scene, mesh, method, lines,
 // first shot, emitters, shards (not threads or ranks); not the iteration cap, tolerance or outputs.
-std::string checkpoint_key(const Options& options, const PatchMesh& mesh);
+// `geometry`: mesh_hash of the mesh (a solve on a store passes the store's
+// own, which it has checked equal: hashing the mesh again took 10 ms of
+// OFFICE's serial start).
+std::string checkpoint_key(const Options& options, const std::string& geometry);
 
 void write_checkpoint(const std::filesystem::path& path, const std::string& key, const RadiosityState& state,
                       const IterationLog& log);

@@ -13,6 +13,7 @@
 #include "error.h"
 #include "first_shot.h"
 #include "stored_shot.h"
+#include "store_identity.h"
 #include "json_text.h"
 #include "mpath_version.h"
 #include "prepared_scene.h"
@@ -242,7 +243,8 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   }
   if (store) add_ar_state(*store, state);
   spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
-  const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, mesh)};
+  const std::string geometry = store ? store->manifest().identity.at("mesh.hash") : mesh_hash(mesh);
+  const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, geometry)};
   start_state(options, flags, mesh, tracer, store.get(), checkpoint, lights, state, record);
   run_iterations(options, mesh, tracer, store.get(), checkpoint, state, record);
   log_remaining(options, mesh, store.get(), state, record.iterations, record.warnings);
