@@ -354,7 +354,7 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shar
   // Merge in shard order: faces, the box's Out, the children's In, and what
   // no line took back where it was held.
   BoxResult result;
-  for (size_t f = 0; f < in.faces.size(); ++f) {
+  for_each_record(in.faces.size(), [&](size_t f) {  // each face its own records: on the threads
     const size_t g = static_cast<size_t>(box.face_global[f]);
     double unsent = 1.0;
     for (const BoxShard& a : acc) unsent -= a.faces.faces[f].quota_used;
@@ -366,7 +366,7 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shar
         state.phi[state.at(g, c)] += a.faces.faces[f].phi_gain[c];
       }
     }
-  }
+  });
   const auto& children = store.hierarchy().boxes[b].children;
   auto unsent = [&](const std::vector<double> BoxShard::*used, size_t i) {
     double u = 1.0;
