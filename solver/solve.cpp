@@ -243,7 +243,7 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   }
   if (store) add_ar_state(*store, state);
   spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
-  const std::string geometry = store ? store->manifest().identity.at("mesh.hash") : mesh_hash(mesh);
+  const std::string geometry = store ? store->manifest().identity.at(kMeshHashKey) : mesh_hash(mesh);
   const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, geometry)};
   start_state(options, flags, mesh, tracer, store.get(), checkpoint, lights, state, record);
   run_iterations(options, mesh, tracer, store.get(), checkpoint, state, record);

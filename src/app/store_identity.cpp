@@ -24,7 +24,7 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
   std::string two_sided;
   for (const auto& name : o.scene.two_sided) two_sided += (two_sided.empty() ? "" : ",") + name;
   return {
-      {"mesh.hash", mesh_hash(mesh)},
+      {kMeshHashKey, mesh_hash(mesh)},
       {"mesh.faces", std::to_string(mesh.face_count())},
       {"mesh.max_patch_area", fmt::format("{}", o.mesh.max_patch_area)},
       {"mesh.curve_segments", std::to_string(o.mesh.curve_segments)},

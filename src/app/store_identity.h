@@ -14,8 +14,10 @@ namespace mpath {
 
 std::map<std::string, std::string> store_identity(const Options& options, const PatchMesh& mesh);
 
-// Hash of the mesh's geometry and faces (catches changes in included files too).
+// Hash of the mesh's geometry and faces (catches changes in included files too),
+// under kMeshHashKey in store_identity.
 std::string mesh_hash(const PatchMesh& mesh);
+inline constexpr const char* kMeshHashKey = "mesh.hash";
 
 // The hierarchy a store is made with: subscenes for solver.method =
 // "hierarchical", the root box alone otherwise (docs/user-guide.md), with
