@@ -255,6 +255,20 @@ bool within(const Bounds& inner, const Bounds& outer) {
   return true;
 }
 
+// No patch but a box's own or its descendants' meets the box's interior.
+void expect_no_foreign_patch_in_a_box(const PatchMesh& mesh, const Hierarchy& h, const std::string& what) {
+  for (size_t b = 1; b < h.boxes.size(); ++b)
+    for (size_t p = 0; p < mesh.patches.size(); ++p) {
+      bool inside = false;  // the box's own or a descendant's patch
+      for (int a = h.patch_box[p]; a >= 0; a = h.boxes[a].parent) inside |= a == static_cast<int>(b);
+      if (inside) continue;
+      const Patch& patch = mesh.patches[p];
+      ASSERT_FALSE(triangle_meets_box(mesh.vertices[patch.v[0]], mesh.vertices[patch.v[1]], mesh.vertices[patch.v[2]],
+                                      h.boxes[b].bounds))
+          << what << ": patch " << p << " in box " << b;
+    }
+}
+
 std::vector<uint8_t> emitting_patches(const Scene& scene, const PatchMesh& mesh) {
   std::vector<uint8_t> out(mesh.patches.size());
   for (size_t p = 0; p < mesh.patches.size(); ++p) out[p] = scene.materials[mesh.patches[p].material].emits();
@@ -306,16 +320,7 @@ TEST(Hierarchy, EachLampBecomesABrightSubsceneOfItsOwnAndNothingElseChanges) {
       EXPECT_GT(shade, 0);
       ++bright_total;
     }
-    for (size_t b = 1; b < h.boxes.size(); ++b)
-      for (size_t p = 0; p < mesh.patches.size(); ++p) {
-        bool inside = false;  // the box's own or a descendant's patch
-        for (int a = h.patch_box[p]; a >= 0; a = h.boxes[a].parent) inside |= a == static_cast<int>(b);
-        if (inside) continue;
-        const Patch& patch = mesh.patches[p];
-        ASSERT_FALSE(triangle_meets_box(mesh.vertices[patch.v[0]], mesh.vertices[patch.v[1]], mesh.vertices[patch.v[2]],
-                                        h.boxes[b].bounds))
-            << "seed " << seed << ": patch " << p << " in box " << b;
-      }
+    expect_no_foreign_patch_in_a_box(mesh, h, fmt::format("seed {}", seed));
   }
   EXPECT_GE(bright_total, 24);
 }
@@ -337,6 +342,114 @@ TEST(PilotBudget, GivesTheLampsBoxesTheirOwnLinesAndItsNestedOptimum) {
   auto density = [&](int b) { return lines[b] / line_box(h.boxes[b].bounds).surface_area(); };
   for (size_t b = 1; b < h.boxes.size(); ++b)
     if (h.boxes[b].depth == 2) EXPECT_GT(density(b), density(h.boxes[b].parent) + density(0)) << describe_hierarchy(h, {});
+}
+
+// A closed room (6 to 9 m by 5 to 7 m, 3 m high) with two to four tables
+// and one to three ceiling fixtures somewhere over the floor: an open
+// trough (a top and four sides, two-sided, 0.8 to 1.4 m long, 0.2 m wide,
+// 0.08 m deep) hanging 0.2 m below the ceiling, with a one-sided strip
+// inside it that emits `strip` radiance downward: 6 polygons a fixture, far
+// fewer than a subscene's 24 (RenderPark's office2 lights its office so).
+// `fixtures` gets each fixture's bounds and its strip's object. Every
+// surface reflects rho and emits `radiance`; the same for the same seed.
+LampRoom trough_room(unsigned seed, double rho, double radiance, double strip) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  LampRoom r;
+  Scene& scene = r.scene;
+  const int m = test::add_material(scene, "grey", rho, radiance);
+  const int housing = test::add_material(scene, "housing", rho, radiance, true);
+  const int light = test::add_material(scene, "strip", rho, radiance + strip);
+  const double w = 6 + 3 * u(rng), d = 5 + 2 * u(rng), top = 2.8;
+  test::add_box(scene, {0, 0, 0}, {w, d, 3}, true, m, test::add_object(scene, "room"));
+  const int tables = 2 + static_cast<int>(seed % 3);
+  for (int k = 0; k < tables; ++k)  // along the long wall, 1.5 m apart
+    test::add_table(scene, 0.3 + 1.5 * k, 0.3 + (d - 1.2) * u(rng), m, fmt::format("table {}", k));
+  const int fixtures = 1 + static_cast<int>(seed % 3);
+  for (int k = 0; k < fixtures; ++k) {
+    const double len = 0.8 + 0.6 * u(rng), x0 = 0.3 + (w - len - 0.6) * u(rng);
+    const double y0 = 0.3 + (d - 0.6) * (k + u(rng)) / fixtures * 0.9, x1 = x0 + len, y1 = y0 + 0.2, z0 = top - 0.08;
+    const int trough = test::add_object(scene, fmt::format("fixture {} trough", k));
+    test::add_quad(scene, {x0, y0, top}, {x1, y0, top}, {x1, y1, top}, {x0, y1, top}, housing, trough);
+    test::add_quad(scene, {x0, y0, z0}, {x1, y0, z0}, {x1, y0, top}, {x0, y0, top}, housing, trough);
+    test::add_quad(scene, {x0, y1, z0}, {x1, y1, z0}, {x1, y1, top}, {x0, y1, top}, housing, trough);
+    test::add_quad(scene, {x0, y0, z0}, {x0, y1, z0}, {x0, y1, top}, {x0, y0, top}, housing, trough);
+    test::add_quad(scene, {x1, y0, z0}, {x1, y1, z0}, {x1, y1, top}, {x1, y0, top}, housing, trough);
+    const int tube = test::add_object(scene, fmt::format("fixture {} strip", k));
+    const double zs = top - 0.01;  // facing down: (b - a) x (c - a) points to -z
+    test::add_quad(scene, {x0 + 0.05, y0 + 0.08, zs}, {x0 + 0.05, y1 - 0.08, zs}, {x1 - 0.05, y1 - 0.08, zs},
+                   {x1 - 0.05, y0 + 0.08, zs}, light, tube);
+    r.lamps.push_back({Bounds{{x0, y0, z0}, {x1, y1, top}}, tube});
+  }
+  return r;
+}
+
+// Given the emitters, each ceiling fixture (6 polygons: too few for a
+// subscene on its own merits) becomes a box of its own (under the root, or
+// under a group box of the tables beneath it) that holds its trough and
+// strip, lies within it and meets no other patch; two fixtures side by side
+// get a box each; everything else is as built without the emitters. Twelve
+// layouts.
+TEST(Hierarchy, EachSmallCeilingFixtureBecomesABrightSubsceneOfItsOwn) {
+  int bright_total = 0;
+  for (unsigned seed = 1; seed <= 12; ++seed) {
+    const LampRoom room = trough_room(seed, 0.5, 0, 10);
+    const PatchMesh mesh = build_mesh(room.scene, 0.01);
+    const std::vector<uint8_t> lit = emitting_patches(room.scene, mesh);
+    const Hierarchy plain = build_hierarchy(mesh, HierarchyOptions{}, false);
+    const Hierarchy h = build_hierarchy(mesh, HierarchyOptions{}, false, false, lit);
+    ASSERT_EQ(h.boxes.size(), plain.boxes.size() + room.lamps.size()) << "seed " << seed << "\n" << describe_hierarchy(h, {});
+    for (size_t l = 0; l < room.lamps.size(); ++l) {
+      int fixture_box = -1;
+      for (size_t b = 1; b < h.boxes.size(); ++b)
+        if (within(h.boxes[b].bounds, room.lamps[l].first)) fixture_box = static_cast<int>(b);
+      ASSERT_GE(fixture_box, 0) << "seed " << seed << ", fixture " << l << "\n" << describe_hierarchy(h, {});
+      const SceneBox& box = h.boxes[fixture_box];
+      EXPECT_TRUE(box.children.empty());
+      EXPECT_LE(box.bounds.surface_area(), h.boxes[box.parent].bounds.surface_area() / 16);
+      int strip = 0, trough = 0;
+      for (uint32_t p : box.patches) {
+        strip += mesh.patches[p].object == room.lamps[l].second;
+        trough += room.scene.objects[mesh.patches[p].object].name.ends_with("trough");
+      }
+      EXPECT_GT(strip, 0);
+      EXPECT_GT(trough, 0);
+      EXPECT_EQ(strip + trough, static_cast<int>(box.patches.size()));
+      ++bright_total;
+    }
+    for (size_t p = 0; p < mesh.patches.size(); ++p) {
+      if (room.scene.objects[mesh.patches[p].object].name.starts_with("fixture")) continue;
+      EXPECT_EQ(h.boxes[h.patch_box[p]].bounds.hi, plain.boxes[plain.patch_box[p]].bounds.hi) << "patch " << p;
+      EXPECT_EQ(h.boxes[h.patch_box[p]].bounds.lo, plain.boxes[plain.patch_box[p]].bounds.lo) << "patch " << p;
+    }
+    expect_no_foreign_patch_in_a_box(mesh, h, fmt::format("seed {}", seed));
+  }
+  EXPECT_GE(bright_total, 20);
+}
+
+// The pilot gives such a fixture's box lines of its own, denser than the
+// root's, and the budget is its model's optimum.
+TEST(PilotBudget, GivesSmallCeilingFixturesLinesOfTheirOwn) {
+  for (unsigned seed : {2u, 6u}) {
+    const LampRoom room = trough_room(seed, 0.6, 0, 30);
+    const PatchMesh mesh = build_mesh(room.scene, 0.01);
+    Hierarchy h = build_hierarchy(mesh, HierarchyOptions{}, false, false, emitting_patches(room.scene, mesh));
+    make_boxes_transparent(h);
+    const std::vector<double> w = pilot_weights(room.scene, mesh, h, 1, 100'000);
+    LineOptions o;
+    o.total = 1'000'000;
+    o.box_budget = "pilot";
+    const std::vector<double> lines = expect_pilot_optimum(h, w, o);
+    auto density = [&](int b) { return lines[b] / line_box(h.boxes[b].bounds).surface_area(); };
+    size_t fixtures = 0;
+    for (size_t b = 1; b < h.boxes.size(); ++b)
+      for (const auto& [bounds, strip] : room.lamps)
+        if (within(h.boxes[b].bounds, bounds)) {
+          ++fixtures;
+          EXPECT_GT(density(b), density(0)) << "seed " << seed << "\n" << describe_hierarchy(h, {});
+        }
+    EXPECT_EQ(fixtures, room.lamps.size());
+  }
 }
 
 TEST(Hierarchy, TwoFarApartTablesBuildTwoSubscenesAndALonePolygonNone) {
@@ -711,6 +824,7 @@ TEST(Transmittance, ArsNoLineCrossedTakeTheirNeighbours) {
 struct FurnaceErrors {
   double mean, rms;
   int depth;
+  size_t boxes;
 };
 FurnaceErrors stored_furnace_errors(Options o, const Scene& scene, double rho, double exitance) {
   TempDir dir;
@@ -735,7 +849,7 @@ FurnaceErrors stored_furnace_errors(Options o, const Scene& scene, double rho, d
     weighted += a * b;
     sq += a * (b - exact) * (b - exact);
   }
-  return {weighted / area / exact - 1, std::sqrt(sq / area) / exact, s.depth};
+  return {weighted / area / exact - 1, std::sqrt(sq / area) / exact, s.depth, s.boxes};
 }
 
 // The furnished room's furnace (three boxes).
@@ -793,6 +907,24 @@ TEST(HierarchicalSolve, FurnaceWithBrightSubscenesIsExact) {
     const FurnaceErrors plain = stored_furnace_errors(o, scene, 0.5, 1.0);
     EXPECT_EQ(bright.depth, 2) << "seed " << seed;
     EXPECT_EQ(plain.depth, 1) << "seed " << seed;
+    EXPECT_NEAR(bright.mean, 0.0, 0.01) << "seed " << seed;
+    EXPECT_LT(bright.rms, 1.5 * plain.rms) << "seed " << seed;
+  }
+}
+
+// The same for ceiling fixtures too small for a subscene on their own
+// merits: boxes of their own with the pilot budget (more boxes than the
+// quotient's store), and the furnace still exact (three layouts).
+TEST(HierarchicalSolve, FurnaceWithSmallBrightFixturesIsExact) {
+  for (unsigned seed : {1u, 5u, 9u}) {
+    const Scene scene = trough_room(seed, 0.5, 1.0 / std::numbers::pi, 0).scene;
+    Options o = test::test_options(1'000'000, 300'000, 0.02);
+    o.lines.box_budget = "pilot";
+    const FurnaceErrors bright = stored_furnace_errors(o, scene, 0.5, 1.0);
+    o.lines.box_budget = "quotient";
+    const FurnaceErrors plain = stored_furnace_errors(o, scene, 0.5, 1.0);
+    EXPECT_EQ(bright.depth, 1) << "seed " << seed;
+    EXPECT_GT(bright.boxes, plain.boxes) << "seed " << seed;
     EXPECT_NEAR(bright.mean, 0.0, 0.01) << "seed " << seed;
     EXPECT_LT(bright.rms, 1.5 * plain.rms) << "seed " << seed;
   }

@@ -37,9 +37,11 @@ constexpr size_t kMinPolygons = 24;
 // ...and has at most this share of the surface of the box it is in (a box
 // nearly as large as its parent adds a level and nothing else).
 constexpr double kMaxNesting = 0.5;
-// A group holding an emitter below max_depth is a box of its own (a lamp in
-// its shade) when its surface is at most this share of the box it would be
-// dissolved into (docs/algorithm.md, "Bright subscenes").
+// A group holding an emitter that would be dissolved (below max_depth, or
+// with fewer than kMinPolygons polygons) is a box of its own (a lamp in its
+// shade, a fluorescent strip in its trough) when its surface is at most this
+// share of the box it would be dissolved into (docs/algorithm.md, "Bright
+// subscenes").
 constexpr double kBrightShare = 1.0 / 16.0;
 
 Bounds merged(const Bounds& a, const Bounds& b) {
@@ -641,21 +643,23 @@ class Builder {
     return lit;
   }
 
-  // A group that may be a bright subscene: it holds an emitter and enough
-  // polygons to pay for a box (never without the emitters: item_lit says no
-  // at once, before any polygons are counted).
-  bool bright_candidate(int item) const {
-    return items_[item].object < 0 && item_lit(item) && item_polygons(item) >= kMinPolygons;
-  }
+  // A group holding an emitter (never without the emitters: item_lit says no
+  // at once).
+  bool lit_group(int item) const { return items_[item].object < 0 && item_lit(item); }
+  // A lit group with enough polygons to be a subscene on its own merits.
+  bool bright_candidate(int item) const { return lit_group(item) && item_polygons(item) >= kMinPolygons; }
 
   // Puts `items` into box `box` (of surface area `area`): objects directly,
   // groups as child boxes, except groups that would not pay as subscenes,
   // whose contents go into `box` instead: deeper than max_depth, holding
-  // fewer than kMinPolygons polygons, or nearly as large as `box`. Below
-  // max_depth, the smallest group around an emitter that is small beside
-  // `box` is a box of its own all the same (bright subscenes, made only when
-  // the emitters are given). `flatten`: every group's contents go into `box`
-  // (a bright box holds its contents directly).
+  // fewer than kMinPolygons polygons, or nearly as large as `box`. A group
+  // around an emitter, small beside `box`, that would be dissolved for being
+  // too deep or too small is a box of its own all the same (bright
+  // subscenes, made only when the emitters are given): the smallest such
+  // group, going down through lit member groups of kMinPolygons polygons or
+  // more, and through any lit member group once below kMinPolygons. `flatten`:
+  // every group's contents go into `box` (a bright box holds its contents
+  // directly).
   void place(Hierarchy& h, int box, const std::vector<int>& items, double area, bool flatten = false) {
     for (int i : items) {
       const Item& it = items_[i];
@@ -664,14 +668,18 @@ class Builder {
         continue;
       }
       const bool too_deep = h.boxes[box].depth + 1 > options_.max_depth;
-      if (too_deep && !flatten && bright_candidate(i) && it.area <= kBrightShare * area) {
-        // The smallest such group: go down while a member group still qualifies.
-        const bool smaller = std::any_of(it.members.begin(), it.members.end(), [&](int m) { return bright_candidate(m); });
+      const bool too_small = item_polygons(i) < kMinPolygons;
+      if ((too_deep || too_small) && !flatten && lit_group(i) && it.area <= kBrightShare * area) {
+        // The smallest such group: go down while a member group still
+        // qualifies (any lit member of a group too small already: two
+        // fixtures side by side get a box each).
+        const bool smaller = std::any_of(it.members.begin(), it.members.end(),
+                                         [&](int m) { return too_small ? lit_group(m) : bright_candidate(m); });
         if (smaller) place(h, box, it.members, area);
         else add_box(h, box, i, true);
         continue;
       }
-      if (too_deep || flatten || item_polygons(i) < kMinPolygons || it.area > kMaxNesting * area) {
+      if (too_deep || flatten || too_small || it.area > kMaxNesting * area) {
         place(h, box, it.members, area, flatten);
         continue;
       }
