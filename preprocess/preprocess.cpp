@@ -6,6 +6,7 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_pipeline.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <fstream>
@@ -104,6 +105,29 @@ bool finished_and_verified(const fs::path& record, const fs::path& dir,
   } catch (const InputError&) {
     return false;
   }
+}
+
+// A store finished earlier keeps the boxes and lines it was made with (its
+// solves use them). Where this run would make others (the pilot budget saw
+// other materials or emitters, or an earlier mpath built the hierarchy
+// differently), the log says which and how to get the new ones.
+void note_other_hierarchy(const fs::path& record, const fs::path& dir, const linestore::Manifest& base) {
+  const std::vector<linestore::BoxEntry>& kept = linestore::read_manifest(record).boxes;
+  const std::vector<linestore::BoxEntry>& now = base.boxes;
+  auto same = [](const linestore::BoxEntry& a, const linestore::BoxEntry& b) {
+    return a.parent == b.parent && a.lines == b.lines && a.patches == b.patches && a.direct_objects == b.direct_objects &&
+           std::equal(a.lo, a.lo + 3, b.lo) && std::equal(a.hi, a.hi + 3, b.hi);
+  };
+  if (std::equal(kept.begin(), kept.end(), now.begin(), now.end(), same)) return;
+  auto lines = [](const std::vector<linestore::BoxEntry>& boxes) {
+    std::vector<uint64_t> out;
+    for (const linestore::BoxEntry& b : boxes) out.push_back(b.lines);
+    return fmt::format("{}", fmt::join(out, ", "));
+  };
+  spdlog::warn("{}: the store was made with {} box(es) of {} lines; this run would make {} box(es) of {} lines (the pilot "
+               "budget saw other materials or emitters, or an earlier mpath built the hierarchy). The store stays valid "
+               "and its solves use its own boxes; remove it, or give another store.dir, to trace the new ones",
+               dir.string(), kept.size(), lines(kept), now.size(), lines(now));
 }
 
 // When every part of a sharded store is there and matches, writes manifest.json.
@@ -279,6 +303,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   const fs::path record = shard.count == 1 ? dir / "manifest.json" : part_manifest(dir, shard);
   if (finished_and_verified(record, dir, identity)) {
     spdlog::info("{}: shard {}/{} finished and verified earlier, not traced again", dir.string(), shard.index, shard.count);
+    note_other_hierarchy(record, dir, base);
     stats.skipped = true;
     if (shard.count > 1) stats.manifest_written = merge_parts(dir, shard, base);
     if (shard.count == 1 || stats.manifest_written) add_first_shot(options, prepared, stats, nullptr);

@@ -369,6 +369,46 @@ TEST(Store, DamagedOrMismatchedStoresAreRefusedByName) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out/solution.ply"));
 }
 
+// A finished store is not traced again. Under the pilot budget its boxes'
+// lines were fitted to the materials the preprocess saw: a rerun with the
+// lamp shade's reflectance changed would give the boxes other lines, keeps
+// the store all the same (it stays valid) and says so; the solve uses the
+// store's own boxes and closes its energy.
+TEST(Store, AFinishedStoreIsKeptAndTheLogSaysWhenThisRunWouldMakeOtherBoxes) {
+  TempDir dir;
+  const std::string src = std::string(MPATH_SOURCE_DIR) + "/configs/room/room.";
+  const std::string mtl = test::read_file(src + "mtl");
+  test::write_file(dir / "room.obj", test::read_file(src + "obj"));
+  test::write_file(dir / "room.mtl", mtl);
+  const std::string room = std::string(MPATH_SOURCE_DIR) + "/configs/room.toml";
+  const std::string args = " lines.total=200000 store.chunk_lines=8192 first_shot.lines=50000 output.png=false "
+                           "output.exr=false scene.file=" + (dir / "room.obj").string() +
+                           " store.dir=" + (dir / "store").string() + " output.dir=" + (dir / "out").string();
+  const std::string preprocess = test::program_bin("mpath-preprocess") + " " + room + args;
+  ASSERT_EQ(test::run(preprocess + " -q").exit_code, 0);
+  const std::string manifest = test::read_file(dir / "store/manifest.json");
+  RunResult r = test::run(preprocess + " --log-level info");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("not traced again"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("this run would make"), std::string::npos) << r.output;
+
+  const size_t at = mtl.find("newmtl lampshade\nKd 0.75 0.7 0.6");
+  ASSERT_NE(at, std::string::npos);
+  test::write_file(dir / "room.mtl", std::string(mtl).replace(at, 32, "newmtl lampshade\nKd 0.05 0.05 0.05"));
+  r = test::run(preprocess + " --log-level info");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("not traced again"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the store was made with 5 box(es) of"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("this run would make 5 box(es) of"), std::string::npos) << r.output;
+  EXPECT_EQ(test::read_file(dir / "store/manifest.json"), manifest);
+  r = test::run(test::solve_bin() + " " + room + args + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto report = nlohmann::json::parse(test::read_file(dir / "out/report.json"));
+  const auto& e = report["energy"];
+  EXPECT_NEAR(e["emitted"].get<double>(), e["absorbed"].get<double>() + e["escaped"].get<double>() + e["unshot"].get<double>(),
+              1e-9 * e["emitted"].get<double>());
+}
+
 // Single bytes flipped anywhere in any file of a hierarchical store (the
 // subscenes' files included): refused by name before the first shot, never
 // a crash or another answer.
