@@ -9,7 +9,11 @@ KIND is one of
   bigroom  groups of chairs and tables, desks and shelves with small objects,
            keyboards, monitors, plants, one ceiling lamp (4,732 polygons);
   office   an office with desks, keyboards, monitors, shelves and stacks full of books,
-           many small objects, a ceiling lamp and two table lamps (30,728 polygons).
+           many small objects, a ceiling lamp and two table lamps (30,728 polygons);
+  troughs  an open-plan office (16 x 12 m) with desks, keyboards, monitors and
+           shelves, lit by 24 ceiling fixtures placed at random: a strip that
+           emits inside an open trough of material "lampshade", 6 polygons each
+           (RenderPark's office2 lights its office so).
 Every piece of furniture is built of separate objects (a table's top and its
 legs, a chair's seat, back and legs), as modelling tools write them; the
 hierarchy groups them. The lampshades' material is "lampshade" (list it in
@@ -158,6 +162,21 @@ def table_lamp(s, name, cx, cy, z, segments):
     s.add(name + " shade", "lampshade", cylinder(cx, cy, z + 0.3, z + 0.48, 0.14, 0.08, segments, caps=False))
 
 
+def trough(s, name, x0, y0, length, top):
+    """An open trough (a top and four sides, 8 cm deep) hanging with its top
+    at `top`, and inside it, facing down, a strip that emits."""
+    x1, y1, z0 = x0 + length, y0 + 0.2, top - 0.08
+    s.add(name + " trough", "lampshade", [
+        [(x0, y0, top), (x1, y0, top), (x1, y1, top), (x0, y1, top)],
+        [(x0, y0, z0), (x1, y0, z0), (x1, y0, top), (x0, y0, top)],
+        [(x0, y1, z0), (x0, y1, top), (x1, y1, top), (x1, y1, z0)],
+        [(x0, y0, z0), (x0, y0, top), (x0, y1, top), (x0, y1, z0)],
+        [(x1, y0, z0), (x1, y1, z0), (x1, y1, top), (x1, y0, top)]])
+    zs = top - 0.01
+    s.add(name + " strip", "bulb", [[(x0 + 0.05, y0 + 0.08, zs), (x0 + 0.05, y1 - 0.08, zs),
+                                     (x1 - 0.05, y1 - 0.08, zs), (x1 - 0.05, y0 + 0.08, zs)]])
+
+
 def shell(s, w, d, h):
     s.add("floor", "floor", [[(0, 0, 0), (w, 0, 0), (w, d, 0), (0, d, 0)]])
     s.add("ceiling", "ceiling", [[(0, 0, h), (0, d, h), (w, d, h), (w, 0, h)]])
@@ -245,6 +264,29 @@ def make_office(rng):
     return s
 
 
+def make_troughs(rng):
+    s = Scene()
+    w, d, h = 16.0, 12.0, 3.0
+    shell(s, w, d, h)
+    for k in range(8):
+        x, y = 1.0 + (k % 4) * 3.5, 2.0 + (k // 4) * 4.5
+        desk(s, "desk %d" % k, x, y, 1.6, 0.8)
+        chair(s, "chair %d" % k, x + 0.6, y + 0.95, "n")
+        keyboard(s, "keyboard %d" % k, x + 0.3, y + 0.05, 0.74, 5, 16)
+        monitor(s, "monitor %d" % k, x + 0.6, y + 0.6, 0.74)
+        scatter(s, "on desk %d" % k, x + 0.7, y, x + 1.6, y + 0.5, 0.74, 6, rng, 12)
+    for k in range(4):
+        shelf(s, "shelf %d" % k, 1.0 + k * 3.5, d - 0.5, 1.2, 2.0, 0.35, 5, rng, books=True)
+    placed = []
+    while len(placed) < 24:  # apart from each other by 0.3 m at least
+        length = rng.uniform(0.8, 1.4)
+        x0, y0 = rng.uniform(0.5, w - 0.5 - length), rng.uniform(0.5, d - 0.9)
+        if all(x0 > a + la + 0.3 or a > x0 + length + 0.3 or y0 > b + 0.5 or b > y0 + 0.5 for a, b, la in placed):
+            trough(s, "fixture %d" % len(placed), x0, y0, length, h - 0.05)
+            placed.append((x0, y0, length))
+    return s
+
+
 MATERIALS = {
     "floor": (0.35, 0.3, 0.25), "ceiling": (0.8, 0.8, 0.8), "wall": (0.7, 0.68, 0.62),
     "wood": (0.55, 0.4, 0.25), "metal": (0.6, 0.6, 0.62), "fabric": (0.2, 0.3, 0.55),
@@ -278,13 +320,13 @@ def write(scene, stem, furnace):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("kind", choices=["room", "bigroom", "office"])
+    ap.add_argument("kind", choices=["room", "bigroom", "office", "troughs"])
     ap.add_argument("stem")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--furnace", type=float, default=None)
     a = ap.parse_args()
     rng = random.Random(a.seed)
-    scene = {"room": make_room, "bigroom": make_bigroom, "office": make_office}[a.kind](rng)
+    scene = {"room": make_room, "bigroom": make_bigroom, "office": make_office, "troughs": make_troughs}[a.kind](rng)
     write(scene, a.stem, a.furnace)
     print("%s: %d objects, %d polygons" % (a.stem + ".obj", len(scene.objects), scene.polygons()))
 
