@@ -275,6 +275,21 @@ std::vector<uint8_t> emitting_patches(const Scene& scene, const PatchMesh& mesh)
   return out;
 }
 
+// A room's mesh and its hierarchy built without and with its emitters.
+struct LitAndPlain {
+  PatchMesh mesh;
+  std::vector<uint8_t> lit;
+  Hierarchy plain, h;
+};
+LitAndPlain lit_and_plain(const LampRoom& room) {
+  LitAndPlain out;
+  out.mesh = build_mesh(room.scene, 0.01);
+  out.lit = emitting_patches(room.scene, out.mesh);
+  out.plain = build_hierarchy(out.mesh, HierarchyOptions{}, false);
+  out.h = build_hierarchy(out.mesh, HierarchyOptions{}, false, false, out.lit);
+  return out;
+}
+
 // Given the emitters, the builder makes each lamp a box of its own below the
 // desks' subscene (bright subscenes): the box holds the bulb and its shade,
 // lies within the lamp, has at most 1/16 of its parent's surface, and no
@@ -285,10 +300,7 @@ TEST(Hierarchy, EachLampBecomesABrightSubsceneOfItsOwnAndNothingElseChanges) {
   int bright_total = 0;
   for (unsigned seed = 1; seed <= 12; ++seed) {
     const LampRoom room = lamp_room(seed, 0.5, 0, 10);
-    const PatchMesh mesh = build_mesh(room.scene, 0.01);
-    const std::vector<uint8_t> lit = emitting_patches(room.scene, mesh);
-    const Hierarchy plain = build_hierarchy(mesh, HierarchyOptions{}, false);
-    const Hierarchy h = build_hierarchy(mesh, HierarchyOptions{}, false, false, lit);
+    const auto [mesh, lit, plain, h] = lit_and_plain(room);
     ASSERT_EQ(plain.max_depth(), 1) << describe_hierarchy(plain, {});
     ASSERT_EQ(h.boxes.size(), plain.boxes.size() + room.lamps.size()) << "seed " << seed << "\n" << describe_hierarchy(h, {});
     EXPECT_EQ(describe_hierarchy(build_hierarchy(mesh, HierarchyOptions{}, false, true, lit), {}), describe_hierarchy(h, {}));
@@ -394,10 +406,7 @@ TEST(Hierarchy, EachSmallCeilingFixtureBecomesABrightSubsceneOfItsOwn) {
   int bright_total = 0;
   for (unsigned seed = 1; seed <= 12; ++seed) {
     const LampRoom room = trough_room(seed, 0.5, 0, 10);
-    const PatchMesh mesh = build_mesh(room.scene, 0.01);
-    const std::vector<uint8_t> lit = emitting_patches(room.scene, mesh);
-    const Hierarchy plain = build_hierarchy(mesh, HierarchyOptions{}, false);
-    const Hierarchy h = build_hierarchy(mesh, HierarchyOptions{}, false, false, lit);
+    const auto [mesh, lit, plain, h] = lit_and_plain(room);
     ASSERT_EQ(h.boxes.size(), plain.boxes.size() + room.lamps.size()) << "seed " << seed << "\n" << describe_hierarchy(h, {});
     for (size_t l = 0; l < room.lamps.size(); ++l) {
       int fixture_box = -1;
