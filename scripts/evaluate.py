@@ -789,28 +789,33 @@ from this run's CSVs; what follows explains them, from the profiles in
   speed-up at equal error is roughly one over the square of the error ratio
   at equal lines, less what a first run costs beyond a classic solve of the
   same lines. That ratio is 0.58-0.64 on OFFICE, 0.67-0.77 on ROOM and BIG
-  ROOM, and 1.01-1.09 on office2, where the pilot gives the root every line
-  (its ceiling strips light the whole room; no subscene holds more of the
-  error than its lines would buy: "pilot budget: 100.0 % of the lines in
-  the root") and the store is a stored Multipath store; BIG ROOM's pilot
-  keeps 89 % in the root. Both sides trace near Embree's limit: on office2
+  ROOM, and 0.91-0.97 on office2 (1.01-1.09 until its fluorescent strip's
+  12-polygon trough became a box of its own in December 2026, docs/algorithm.md,
+  "Bright subscenes": that box holds the error that the trough, bright and
+  small, held; the first run's median went from 1.29x to the figure above
+  and the kept-store solve's from 5.13x). The rest of office2's error is in
+  its walls, ceiling and desks, lit by a strip that lights the whole room,
+  which only the root's lines carry (the pilot keeps 94 % of the lines
+  there); BIG ROOM's pilot keeps 89 % in the root. Both sides trace near Embree's limit: on office2
   classic's passes ran at 85 % of Embree's raw all-hit rate and the
   preprocess at 83 % (docs/performance.md, the limit benchmark), and at 4M
   lines classic's first pass took 1.08 s for its 4M lines where the
   preprocess's box took 1.15 s for the same count (2 threads, December
   2026). What a first run saves is the lines classic casts after its first
   pass (1.6M more on office2 at 4M, 40 %) and what a lower error at equal
-  lines buys; on office2, where the error ratio is about 1, that is not
-  1.5x. A kept-store solve reads its first shot from the
+  lines buys; on office2, where the error ratio is above 0.9, that is
+  about 1.4x, not 1.5x (above 1.5x at 0.5M lines, 1.2-1.3x at 2-4M, where
+  classic's fixed costs weigh less). A kept-store solve reads its first shot from the
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is the
   transport loop over the stored lines and little else; on office2 that
-  loop is stored Multipath's (one box), and its kept-store solve is near
-  5x since the passes decode each chunk straight into their order and the
-  programs ask for huge pages (docs/performance.md: office2's kept-store
-  solve 0.286 -> 0.252 s from the huge pages alone, its page faults
-  halved): above it in some runs, just below it in others (4.98x at
-  5587443, 5.22x at 6e74079), as the host's speed moves classic's solves
-  and the short hierarchical ones unequally. These times include each program's start-up (about 0.03 s with
+  loop is nearly stored Multipath's (the root and the trough's small box),
+  and its kept-store solve is near 5x since the passes decode each chunk
+  straight into their order and the programs ask for huge pages
+  (docs/performance.md: office2's kept-store solve 0.286 -> 0.252 s from
+  the huge pages alone, its page faults halved), and above it since the
+  trough's box lowered the error (4.98x at 5587443, 5.22x at 6e74079,
+  5.13x at d684001 before the box), as the host's speed moves classic's
+  solves and the short hierarchical ones unequally. These times include each program's start-up (about 0.03 s with
   the exec that asks for huge pages): at 1M lines that is a sixth of
   office2's kept-store solve.
 """
