@@ -35,6 +35,7 @@ struct BoxEntry {
   uint64_t objects = 0;  // objects in it and its children
   double quotient = 0;
   std::vector<int> direct_objects;  // the grouping's objects directly in it (the solver assembles the hierarchy from them)
+  bool operator==(const BoxEntry&) const = default;
 };
 
 struct Manifest {

@@ -6,10 +6,10 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_pipeline.h>
 
-#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <fstream>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "atomic_file.h"
@@ -90,20 +90,20 @@ linestore::Manifest base_manifest(const Options& options, const PatchMesh& mesh,
   return m;
 }
 
-// True when a shard's file and its record exist, match this run and verify.
-bool finished_and_verified(const fs::path& record, const fs::path& dir,
-                           const std::map<std::string, std::string>& identity) {
-  if (!fs::exists(record)) return false;
+// A shard's record, when it and its files exist, match this run and verify.
+std::optional<linestore::Manifest> finished_and_verified(const fs::path& record, const fs::path& dir,
+                                                         const std::map<std::string, std::string>& identity) {
+  if (!fs::exists(record)) return std::nullopt;
   try {
-    const linestore::Manifest m = linestore::read_manifest(record);
-    if (!linestore::identity_mismatch(identity, m.identity).empty() || m.files.empty()) return false;
+    linestore::Manifest m = linestore::read_manifest(record);
+    if (!linestore::identity_mismatch(identity, m.identity).empty() || m.files.empty()) return std::nullopt;
     for (const linestore::StoreFile& f : m.files) {
       const fs::path file = dir / f.name;
-      if (!fs::exists(file) || fs::file_size(file) != f.bytes || hash_file(file) != f.hash) return false;
+      if (!fs::exists(file) || fs::file_size(file) != f.bytes || hash_file(file) != f.hash) return std::nullopt;
     }
-    return true;
+    return m;
   } catch (const InputError&) {
-    return false;
+    return std::nullopt;
   }
 }
 
@@ -111,14 +111,10 @@ bool finished_and_verified(const fs::path& record, const fs::path& dir,
 // solves use them). Where this run would make others (the pilot budget saw
 // other materials or emitters, or an earlier mpath built the hierarchy
 // differently), the log says which and how to get the new ones.
-void note_other_hierarchy(const fs::path& record, const fs::path& dir, const linestore::Manifest& base) {
-  const std::vector<linestore::BoxEntry>& kept = linestore::read_manifest(record).boxes;
+void note_other_hierarchy(const linestore::Manifest& record, const fs::path& dir, const linestore::Manifest& base) {
+  const std::vector<linestore::BoxEntry>& kept = record.boxes;
   const std::vector<linestore::BoxEntry>& now = base.boxes;
-  auto same = [](const linestore::BoxEntry& a, const linestore::BoxEntry& b) {
-    return a.parent == b.parent && a.lines == b.lines && a.patches == b.patches && a.direct_objects == b.direct_objects &&
-           std::equal(a.lo, a.lo + 3, b.lo) && std::equal(a.hi, a.hi + 3, b.hi);
-  };
-  if (std::equal(kept.begin(), kept.end(), now.begin(), now.end(), same)) return;
+  if (kept == now) return;
   auto lines = [](const std::vector<linestore::BoxEntry>& boxes) {
     std::vector<uint64_t> out;
     for (const linestore::BoxEntry& b : boxes) out.push_back(b.lines);
@@ -301,9 +297,9 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   const auto identity = store_identity(options, mesh);
   const linestore::Manifest base = base_manifest(options, mesh, hierarchy, budget, identity);
   const fs::path record = shard.count == 1 ? dir / "manifest.json" : part_manifest(dir, shard);
-  if (finished_and_verified(record, dir, identity)) {
+  if (const auto finished = finished_and_verified(record, dir, identity)) {
     spdlog::info("{}: shard {}/{} finished and verified earlier, not traced again", dir.string(), shard.index, shard.count);
-    note_other_hierarchy(record, dir, base);
+    note_other_hierarchy(*finished, dir, base);
     stats.skipped = true;
     if (shard.count > 1) stats.manifest_written = merge_parts(dir, shard, base);
     if (shard.count == 1 || stats.manifest_written) add_first_shot(options, prepared, stats, nullptr);
