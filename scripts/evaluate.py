@@ -831,7 +831,7 @@ from this run's CSVs; what follows explains them, from the profiles in
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--scenes", default="room,bigroom,office,office2,office3,soda")
+    ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--seeds", default="1,2,3")
     ap.add_argument("--budgets", default=None, help="one ladder for every scene (default: each scene's own)")
     ap.add_argument("--reference-lines", default=None)
