@@ -177,12 +177,79 @@ std::vector<int> face_proxies(const PatchMesh& mesh, const SceneBox& sb, const S
 
 }  // namespace
 
-BoxStore::BoxStore(const Options& options, const PatchMesh& mesh) {
+namespace {
+
+// Every file the manifest lists: a plain name, its size and its hash as
+// recorded (before any work); the first found wrong, or null.
+std::exception_ptr check_files(const fs::path& dir, const linestore::Manifest& manifest) try {
+  const fs::path manifest_path = dir / "manifest.json";
+  uint64_t bytes = 0;
+  for (const linestore::StoreFile& f : manifest.files) {
+    const fs::path name(f.name);
+    if (name.empty() || name != name.filename() || f.name == "." || f.name == "..")
+      throw InputError(fmt::format("{}: lists \"{}\", not a file name in the store's folder (damaged manifest); run "
+                                   "mpath-preprocess again", manifest_path.string(), f.name));
+    const fs::path path = dir / name;
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+      throw InputError(fmt::format("{}: missing (listed in {})", path.string(), manifest_path.string()));
+    const uint64_t size = fs::file_size(path, ec);
+    if (ec || size != f.bytes)
+      throw InputError(fmt::format("{}: {} bytes, the manifest says {} (truncated or from another run)", path.string(),
+                                   size, f.bytes));
+    bytes += size;
+  }
+  // The whole store is read once and hashed, in parallel, before any work:
+  // damage or a file of another store of the same size is found now, not in
+  // the middle of an iteration. MPI ranks share the files as they share a
+  // pass's shards (Ranks::owns: a contiguous run each), so a shared file
+  // system serves the store once; a rank that finds damage ends them all.
+  const int file_count = static_cast<int>(manifest.files.size());
+  const auto mine = [&](size_t i) { return Ranks::owns(static_cast<int>(i), file_count); };
+  if (Ranks::size() > 1) {
+    bytes = 0;
+    for (size_t i = 0; i < manifest.files.size(); ++i)
+      if (mine(i)) bytes += manifest.files[i].bytes;
+  }
+  Progress progress("checking store", bytes, "bytes", true);
+  tbb::parallel_for(size_t{0}, manifest.files.size(), [&](size_t i) {
+    if (!mine(i)) return;
+    const linestore::StoreFile& f = manifest.files[i];
+    const fs::path path = dir / f.name;
+    if (hash_file(path) != f.hash)
+      throw InputError(fmt::format("{}: its contents do not match the hash in {} (damaged, or a file of another "
+                                   "store); run mpath-preprocess again", path.string(), manifest_path.string()));
+    progress.advance(f.bytes);
+  });
+  progress.finish();
+  return nullptr;
+} catch (...) {
+  return std::current_exception();
+}
+
+}  // namespace
+
+CheckedFiles check_store_files(const fs::path& dir) {
+  CheckedFiles checked{linestore::read_manifest(dir / "manifest.json"), nullptr};
+  checked.damage = check_files(dir, checked.manifest);
+  return checked;
+}
+
+BoxStore::BoxStore(const Options& options, const PatchMesh& mesh, std::optional<CheckedFiles> checked) {
   const fs::path manifest_path = options.store.dir / "manifest.json";
-  manifest_ = linestore::read_manifest(manifest_path);
+  manifest_ = checked ? std::move(checked->manifest) : linestore::read_manifest(manifest_path);
   check_against(options, mesh, manifest_path);
   lay_out_boxes(mesh);
-  verify_files(options.store.dir, manifest_path);
+  const std::exception_ptr damage = checked ? checked->damage : check_files(options.store.dir, manifest_);
+  if (damage) std::rethrow_exception(damage);
+  // The ranks go on together once every one has checked its files: a rank
+  // that found damage ends them all (Ranks::finish) while the others wait
+  // here, so the error is the hash's, naming the file, and not whatever
+  // another rank's passes meet later in that file (a chunk's own checksum).
+  if (Ranks::size() > 1) {
+    uint64_t agreed = 1;
+    Ranks::sum(&agreed, 1);
+  }
   open_files(options.store.dir, manifest_path);
   // Each box's data from its own counts and its parent's (read only here).
   tbb::parallel_for(size_t{0}, boxes_.size(), [&](size_t b) { derive_box_data(mesh, b); });
@@ -249,56 +316,6 @@ void BoxStore::lay_out_boxes(const PatchMesh& mesh) {
       offset += hierarchy_.boxes[c].ar_count();
     }
     box.counts.resize(sb.patches.size(), sb.ar_count(), offset, static_cast<size_t>(hierarchy_.class_span(static_cast<int>(b))));
-  }
-}
-
-void BoxStore::verify_files(const fs::path& dir, const fs::path& manifest_path) const {
-  uint64_t bytes = 0;
-  for (const linestore::StoreFile& f : manifest_.files) {
-    const fs::path name(f.name);
-    if (name.empty() || name != name.filename() || f.name == "." || f.name == "..")
-      throw InputError(fmt::format("{}: lists \"{}\", not a file name in the store's folder (damaged manifest); run "
-                                   "mpath-preprocess again", manifest_path.string(), f.name));
-    const fs::path path = dir / name;
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec))
-      throw InputError(fmt::format("{}: missing (listed in {})", path.string(), manifest_path.string()));
-    const uint64_t size = fs::file_size(path, ec);
-    if (ec || size != f.bytes)
-      throw InputError(fmt::format("{}: {} bytes, the manifest says {} (truncated or from another run)", path.string(),
-                                   size, f.bytes));
-    bytes += size;
-  }
-  // The whole store is read once and hashed, in parallel, before any work:
-  // damage or a file of another store of the same size is found now, not in
-  // the middle of an iteration. MPI ranks share the files as they share a
-  // pass's shards (Ranks::owns: a contiguous run each), so a shared file
-  // system serves the store once; a rank that finds damage ends them all.
-  const int file_count = static_cast<int>(manifest_.files.size());
-  const auto mine = [&](size_t i) { return Ranks::owns(static_cast<int>(i), file_count); };
-  if (Ranks::size() > 1) {
-    bytes = 0;
-    for (size_t i = 0; i < manifest_.files.size(); ++i)
-      if (mine(i)) bytes += manifest_.files[i].bytes;
-  }
-  Progress progress("checking store", bytes, "bytes", true);
-  tbb::parallel_for(size_t{0}, manifest_.files.size(), [&](size_t i) {
-    if (!mine(i)) return;
-    const linestore::StoreFile& f = manifest_.files[i];
-    const fs::path path = dir / f.name;
-    if (hash_file(path) != f.hash)
-      throw InputError(fmt::format("{}: its contents do not match the hash in {} (damaged, or a file of another "
-                                   "store); run mpath-preprocess again", path.string(), manifest_path.string()));
-    progress.advance(f.bytes);
-  });
-  progress.finish();
-  // The ranks go on together once every one has checked its files: a rank
-  // that found damage ends them all (Ranks::finish) while the others wait
-  // here, so the error is the hash's, naming the file, and not whatever
-  // another rank's passes meet later in that file (a chunk's own checksum).
-  if (Ranks::size() > 1) {
-    uint64_t checked = 1;
-    Ranks::sum(&checked, 1);
   }
 }
 

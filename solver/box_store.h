@@ -6,6 +6,8 @@
 // power held in an AR that no line can carry is moved, and its chunks.
 #pragma once
 
+#include <exception>
+#include <optional>
 #include <filesystem>
 #include <memory>
 
@@ -80,11 +82,27 @@ inline bool touching(const StoreBox& box, const linestore::Event& a, const lines
   return (ca >= 0) & (ca == cb);
 }
 
+// A store's manifest and its files checked against it (a plain name, the
+// size and the hash recorded for each), which needs no scene: mpath-solve
+// checks them on another thread while it loads and meshes the scene, then
+// hands them to BoxStore. Throws when the manifest cannot be read; a
+// missing, cut or damaged file is kept in `damage`, thrown by BoxStore once
+// the store is known to be this scene's (a store of another scene is named
+// as such, not by its first differing file). No MPI call: any thread may
+// run it.
+struct CheckedFiles {
+  linestore::Manifest manifest;
+  std::exception_ptr damage;
+};
+CheckedFiles check_store_files(const std::filesystem::path& dir);
+
 class BoxStore {
  public:
   // Throws InputError naming the mismatching key, the differing hierarchy, or
-  // the missing, truncated or foreign file.
-  BoxStore(const Options& options, const PatchMesh& mesh);
+  // the missing, truncated or foreign file. Without `checked` it reads the
+  // manifest and checks the files itself (after the identity, so that a
+  // store of another scene is not hashed first).
+  BoxStore(const Options& options, const PatchMesh& mesh, std::optional<CheckedFiles> checked = std::nullopt);
 
   const linestore::Manifest& manifest() const { return manifest_; }
   // The line-set data of a store of transparent boxes (hierarchy.transport =
@@ -116,8 +134,6 @@ class BoxStore {
   // against the manifest, its counts summed; what the passes derive from them.
   void check_against(const Options& options, const PatchMesh& mesh, const std::filesystem::path& manifest_path);
   void lay_out_boxes(const PatchMesh& mesh);
-  // Every file the manifest lists: a plain name, its size and its hash as recorded (before any work).
-  void verify_files(const std::filesystem::path& dir, const std::filesystem::path& manifest_path) const;
   void open_files(const std::filesystem::path& dir, const std::filesystem::path& manifest_path);
   void derive_box_data(const PatchMesh& mesh, size_t b);
   uint64_t total(uint64_t StoreBox::*field) const;

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
+#include <tbb/task_group.h>
 
 #include <chrono>
 #include <optional>
@@ -34,11 +35,47 @@ using clock = std::chrono::steady_clock;
 
 double seconds_since(clock::time_point t) { return std::chrono::duration<double>(clock::now() - t).count(); }
 
+// The store's files checked against its manifest on another thread while
+// this one loads and meshes the scene (prepare_scene): their hashes read the
+// whole store, which needs no scene. With solver.threads = 1 the check runs
+// in wait(), after the scene, as before. An error of the scene comes first
+// (the check is cancelled or waited for); one of the store is thrown by
+// open_store, in the order BoxStore gives.
+class StoreCheck {
+ public:
+  explicit StoreCheck(const Options& options) {
+    if (options.solver.method == SolverMethod::classic || !std::filesystem::is_directory(options.store.dir)) return;
+    tasks_.run([this, dir = options.store.dir] {
+      try {
+        checked_ = check_store_files(dir);
+      } catch (...) {
+        unread_ = std::current_exception();
+      }
+    });
+  }
+  ~StoreCheck() {
+    tasks_.cancel();
+    tasks_.wait();
+  }
+  // The checked files, or nullopt where no check ran (BoxStore then reads the manifest and names what is missing).
+  std::optional<CheckedFiles> take() {
+    tasks_.wait();
+    if (unread_) std::rethrow_exception(unread_);
+    return std::move(checked_);
+  }
+
+ private:
+  tbb::task_group tasks_;
+  std::optional<CheckedFiles> checked_;
+  std::exception_ptr unread_;
+};
+
 // The store of a stored-line method, checked before any work (null for classic).
-std::unique_ptr<BoxStore> open_store(const Options& options, const PatchMesh& mesh, SolveTimings& timings) {
+std::unique_ptr<BoxStore> open_store(const Options& options, const PatchMesh& mesh, StoreCheck& check,
+                                     SolveTimings& timings) {
   if (options.solver.method == SolverMethod::classic) return nullptr;
   const auto start = clock::now();
-  auto store = std::make_unique<BoxStore>(options, mesh);
+  auto store = std::make_unique<BoxStore>(options, mesh, check.take());
   timings.store = seconds_since(start);
   spdlog::info("store {}: {} box(es), depth {}, {} lines, {} events, {:.1f} MB", options.store.dir.string(),
                store->box_count(), store->hierarchy().max_depth(), store->lines(), store->events(), store->bytes() / 1e6);
@@ -208,15 +245,16 @@ void run_solve(const Options& options, const SolveFlags& flags) {
                to_string(options.solver.method), record.threads,
                record.ranks > 1 ? fmt::format(" on each of {} MPI ranks", record.ranks) : "");
 
-  const PreparedScene prepared = prepare_scene(options);
-  const PatchMesh& mesh = prepared.mesh;
   // A store being rewritten by mpath-preprocess is not read (the lock is
   // shared: runs that only read it go on together).
   std::optional<DirectoryLock> store_lock;
   if (options.solver.method != SolverMethod::classic && std::filesystem::is_directory(options.store.dir))
     store_lock.emplace(options.store.dir, kLockFile, DirectoryLock::Role::reader, "store.dir",
                        "mpath-preprocess is writing this store; solve when it has finished");
-  const std::unique_ptr<BoxStore> store = open_store(options, mesh, record.timings);
+  StoreCheck check(options);
+  const PreparedScene prepared = prepare_scene(options);
+  const PatchMesh& mesh = prepared.mesh;
+  const std::unique_ptr<BoxStore> store = open_store(options, mesh, check, record.timings);
   if (flags.dry_run) {
     spdlog::info("dry run: config, scene{} are valid; nothing solved", store ? " and store" : "");
     return;

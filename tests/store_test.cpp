@@ -350,6 +350,22 @@ TEST(Store, DamagedOrMismatchedStoresAreRefusedByName) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("box0000.lines: its contents do not match the hash in"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "out/checkpoint.bin"));  // found before any work
+  // The files are hashed on another thread while the scene loads
+  // (solve.cpp, StoreCheck): a scene's error, and a store made for another
+  // config, are still named before the damage, on one thread or two.
+  for (const std::string threads : {" solver.threads=1", " solver.threads=2"}) {
+    r = solve("store.dir=" + store + " lines.total=160000" + threads + out);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("lines.total: the store was made with 150000"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("do not match the hash"), std::string::npos) << r.output;
+    r = solve("store.dir=" + store + " scene.file=" + (dir / "none.obj").string() + threads + out);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("none.obj"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("do not match the hash"), std::string::npos) << r.output;
+    r = solve("store.dir=" + store + threads + out);
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.output.find("box0000.lines: its contents do not match the hash in"), std::string::npos) << r.output;
+  }
 
   test::write_file(file, original.substr(0, original.size() - 1000));
   r = solve("store.dir=" + store + out);
