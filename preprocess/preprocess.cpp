@@ -266,6 +266,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
     const long long lines = options.lines.pilot_lines();
     pilot = pilot_weights(prepared.scene, mesh, hierarchy, options.lines.seed, static_cast<uint64_t>(lines));
     stats.pilot_seconds = seconds(clock::now() - t);
+    stats.pilot_lines = static_cast<uint64_t>(lines);
     spdlog::info("pilot: {} local and {} global lines ({:.2f} s){}", lines, lines, stats.pilot_seconds,
                  pilot.empty() ? ": nothing emits, the subscenes share by quotient" : "");
   }
@@ -327,6 +328,7 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   const nlohmann::json timings = {{"shard", fmt::format("{}/{}", shard.index, shard.count)}, {"lines", stats.lines},
                                  {"events", stats.events}, {"bytes", stats.bytes}, {"raw_bytes", stats.raw_bytes},
                                  {"hierarchy_seconds", stats.hierarchy_seconds}, {"pilot_seconds", stats.pilot_seconds},
+                                 {"pilot_lines", stats.pilot_lines},
                                  {"first_shot_seconds", stats.first_shot_seconds},
                                  {"first_shot_lines", stats.first_shot_lines},
                                  {"first_shot_bytes", stats.first_shot_bytes},

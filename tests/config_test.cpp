@@ -58,6 +58,27 @@ TEST(Config, WrongValueTypeIsNamed) {
   EXPECT_NE(e.find("'solver.iterations': expected an integer, got a string"), std::string::npos) << e;
 }
 
+// The pilot's lines (lines.pilot, docs/algorithm.md "Pilot budget"): by
+// default a twentieth of lines.total within [50k, 200k], never above a
+// quarter of it; a set count is kept up to that quarter. Negative counts
+// are errors.
+TEST(Config, ThePilotFollowsLinesTotalUnlessSet) {
+  TempDir dir;
+  write_file(dir / "run.toml", "scene.file = \"a.obj\"\n");
+  const auto pilot = [&](const std::vector<std::string>& keys) { return load_options(dir / "run.toml", keys).lines.pilot_lines(); };
+  EXPECT_EQ(pilot({"lines.total=100000"}), 25'000);  // a quarter
+  EXPECT_EQ(pilot({"lines.total=250000"}), 50'000);
+  EXPECT_EQ(pilot({"lines.total=1000000"}), 50'000);
+  EXPECT_EQ(pilot({"lines.total=2000000"}), 100'000);
+  EXPECT_EQ(pilot({"lines.total=3000000"}), 150'000);
+  EXPECT_EQ(pilot({"lines.total=4000000"}), 200'000);
+  EXPECT_EQ(pilot({"lines.total=64000000"}), 200'000);
+  EXPECT_EQ(pilot({"lines.total=1000000", "lines.pilot=200000"}), 200'000);
+  EXPECT_EQ(pilot({"lines.total=400000", "lines.pilot=200000"}), 100'000);
+  EXPECT_EQ(pilot({"lines.total=64000000", "lines.pilot=1000000"}), 1'000'000);
+  EXPECT_NE(error_of(dir / "run.toml", {"lines.pilot=-1"}).find("lines.pilot"), std::string::npos);
+}
+
 TEST(Config, OutOfRangeAndUnknownChoicesAreRejected) {
   TempDir dir;
   write_file(dir / "run.toml", "scene.file = \"a.obj\"\n");

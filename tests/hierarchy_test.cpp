@@ -20,6 +20,7 @@
 #include "sampling.h"
 #include "scene_readers.h"
 #include "compare.h"
+#include "store_identity.h"
 #include "test_util.h"
 
 namespace mpath {
@@ -193,7 +194,7 @@ TEST(PilotBudget, MakesAStoreThatSolves) {
   EXPECT_GE(s.boxes, 2u);
   EXPECT_LT(std::fabs(s.state.energy_residual()) / s.state.emitted_total(), 1e-10);
   const auto manifest = nlohmann::json::parse(test::read_file(dir / "store/manifest.json"));
-  EXPECT_EQ(manifest["identity"]["lines.box_budget"], "pilot of 200000 lines") << manifest["identity"].dump();
+  EXPECT_EQ(manifest["identity"]["lines.box_budget"], kDefaultPilot) << manifest["identity"].dump();
 }
 
 // A closed room with a row of 3 to 5 desks side by side (one subscene), a

@@ -34,8 +34,11 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
       {"scene.mgf_default_sides", std::to_string(o.scene.mgf_default_sides)},
       {"lines.total", std::to_string(o.lines.total)},
       {"lines.root_fraction", fmt::format("{}", o.lines.root_fraction)},
-      {"lines.box_budget", o.lines.box_budget == "pilot" ? fmt::format("pilot of {} lines", o.lines.pilot)
-                                                         : o.lines.box_budget},
+      // The pilot as set (its lines follow from it and lines.total, which is
+      // checked on its own: a run with other lines.total is named by that).
+      {"lines.box_budget", o.lines.box_budget != "pilot" ? o.lines.box_budget
+                           : o.lines.pilot > 0         ? fmt::format("pilot of {} lines", o.lines.pilot)
+                                                       : std::string(kDefaultPilot)},
       {"lines.min_density", fmt::format("{}", o.lines.min_density)},
       {"hierarchy.subscenes", o.solver.method == SolverMethod::hierarchical ? "yes" : "no (solver.method = multipath)"},
       {"hierarchy.group_threshold", fmt::format("{}", o.hierarchy.group_threshold)},

@@ -18,6 +18,9 @@ std::map<std::string, std::string> store_identity(const Options& options, const 
 // under kMeshHashKey in store_identity.
 std::string mesh_hash(const PatchMesh& mesh);
 inline constexpr const char* kMeshHashKey = "mesh.hash";
+// lines.box_budget in the identity of a store made with the default pilot
+// (lines.pilot = 0: its lines follow lines.total).
+inline constexpr const char* kDefaultPilot = "pilot of a twentieth of lines.total (at least 50000 lines, at most 200000)";
 
 // The hierarchy a store is made with: subscenes for solver.method =
 // "hierarchical", the root box alone otherwise (docs/user-guide.md), with

@@ -412,8 +412,8 @@ std::vector<ConfigKey> make_table() {
        SET(o.lines.box_budget = get_choice(n, s, "budget", {"quotient", "objects", "pilot"})), GET(o.lines.box_budget)},
       {"lines.pilot",
        "local lines from the emitters and global lines of the pilot of `lines.box_budget = \"pilot\"` (at most a "
-       "quarter of `lines.total`)",
-       SET(o.lines.pilot = positive_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.lines.pilot))},
+       "quarter of `lines.total`); 0: a twentieth of `lines.total`, at least 50,000 and at most 200,000",
+       SET(o.lines.pilot = zero_or_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.lines.pilot))},
       {"lines.min_density",
        "no subscene gets fewer lines per unit of box surface than this times the root's (all boxes scaled down alike "
        "when the floors ask for more than `lines.total`)",

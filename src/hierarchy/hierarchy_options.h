@@ -31,11 +31,18 @@ struct LineOptions {
   // "pilot" is the default: at equal lines it errs less than the paper's rule
   // on every measured scene with subscenes (docs/algorithm.md).
   std::string box_budget = "pilot";
-  long long pilot = 200'000;  // local and global lines of the "pilot" budget (preprocess/pilot.h)
-  // The pilot's lines: `pilot`, but never more than a quarter of the run's
-  // (at 250k lines on ROOM and OFFICE a pilot of 62.5k lines set budgets as
-  // good as one of 200k; docs/algorithm.md).
-  long long pilot_lines() const { return std::min(pilot, std::max(1LL, total / 4)); }
+  long long pilot = 0;  // local and global lines of the "pilot" budget (preprocess/pilot.h); 0: pilot_lines()'s default
+  // The pilot's lines: `pilot` where set, but never more than a quarter of
+  // the run's; by default a twentieth of the run's, at least 50,000 and at
+  // most 200,000 (or a quarter of the run's, if less). A smaller pilot set
+  // budgets as good as one of 200k at 250k to 2M lines on ROOM, BIG ROOM,
+  // OFFICE and office2, and a first run spends its pilot's time only once
+  // (docs/algorithm.md, "Pilot budget").
+  long long pilot_lines() const {
+    const long long quarter = std::max(1LL, total / 4);
+    if (pilot > 0) return std::min(pilot, quarter);
+    return std::min(quarter, std::clamp(total / 20, 50'000LL, 200'000LL));
+  }
   // No subscene gets fewer lines per unit of box surface than this times
   // the root's (docs/algorithm.md).
   double min_density = 1.0;
