@@ -797,7 +797,8 @@ from this run's CSVs; what follows explains them, from the profiles in
   equal lines; its first run is faster all the same, since classic casts
   more lines than the store holds (its later passes), and its error falls
   with lines on both sides (12 % at 1M to about 4.4 % at 8M).
-- **Where a target is not met** (first runs on BIG ROOM and office2).
+- **Where a target is not met** (BIG ROOM's first run; office2's
+  first run meets its 1.5x at the median but not at every budget).
   A first run spends about four fifths of its time preprocessing, the
   first shot it traces for the store included (the table above); the
   preprocess's profile (BIG ROOM, docs/performance.md) is Embree's tracing
@@ -807,15 +808,19 @@ from this run's CSVs; what follows explains them, from the profiles in
   4.5 %: per line about what a classic pass costs, so a first run's
   speed-up at equal error is roughly one over the square of the error ratio
   at equal lines, less what a first run costs beyond a classic solve of the
-  same lines. That ratio is 0.58-0.64 on OFFICE, 0.67-0.77 on ROOM and BIG
-  ROOM, and 0.91-0.97 on office2 (1.01-1.09 until its fluorescent strip's
+  same lines. That ratio is 0.57-0.64 on OFFICE, 0.67-0.77 on ROOM and BIG
+  ROOM, and 0.91-0.98 on office2 (1.01-1.09 until its fluorescent strip's
   12-polygon trough became a box of its own in December 2026, docs/algorithm.md,
   "Bright subscenes": that box holds the error that the trough, bright and
   small, held; the first run's median went from 1.29x to the figure above
-  and the kept-store solve's from 5.13x). The rest of office2's error is in
-  its walls, ceiling and desks, lit by a strip that lights the whole room,
-  which only the root's lines carry (the pilot keeps 94 % of the lines
-  there); BIG ROOM's pilot keeps 89 % in the root. Both sides trace near Embree's limit: on office2
+  and the kept-store solve's from 5.13x). On BIG ROOM a ratio of 0.70-0.77
+  bounds the first run near 1/0.73^2 = 1.9x before the preprocess's own
+  cost; 2.5x needs a lower error at equal lines, which needs the error out
+  of the root: its pilot keeps 89 % of the lines in the root, where the
+  walls' exchanges with the rest of the room are carried. The rest of
+  office2's error is in its walls, ceiling and desks, lit by a strip that
+  lights the whole room, which only the root's lines carry (the pilot keeps
+  94 % of the lines there). Both sides trace near Embree's limit: on office2
   classic's passes ran at 85 % of Embree's raw all-hit rate and the
   preprocess at 83 % (docs/performance.md, the limit benchmark), and at 4M
   lines classic's first pass took 1.08 s for its 4M lines where the
@@ -823,8 +828,9 @@ from this run's CSVs; what follows explains them, from the profiles in
   2026). What a first run saves is the lines classic casts after its first
   pass (1.6M more on office2 at 4M, 40 %) and what a lower error at equal
   lines buys; on office2, where the error ratio is above 0.9, that is
-  about 1.4x, not 1.5x (above 1.5x at 0.5M lines, 1.2-1.3x at 2-4M, where
-  classic's fixed costs weigh less). A kept-store solve reads its first shot from the
+  1.21x to 1.93x by budget (the per-scene table: above 1.5x at the small
+  budgets, where classic's fixed costs weigh more, near 1.2-1.3x at the
+  large ones). A kept-store solve reads its first shot from the
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is the
   transport loop over the stored lines and little else; on office2 that
   loop is nearly stored Multipath's (the root and the trough's small box),

@@ -43,8 +43,9 @@ double seconds_since(clock::time_point t) { return std::chrono::duration<double>
 // open_store, in the order BoxStore gives.
 class StoreCheck {
  public:
-  explicit StoreCheck(const Options& options) {
-    if (options.solver.method == SolverMethod::classic || !std::filesystem::is_directory(options.store.dir)) return;
+  // `reads_store`: a stored-line method whose store.dir is a folder (nothing to check otherwise).
+  StoreCheck(const Options& options, bool reads_store) {
+    if (!reads_store) return;
     tasks_.run([this, dir = options.store.dir] {
       try {
         checked_ = check_store_files(dir);
@@ -247,11 +248,13 @@ void run_solve(const Options& options, const SolveFlags& flags) {
 
   // A store being rewritten by mpath-preprocess is not read (the lock is
   // shared: runs that only read it go on together).
+  const bool reads_store =
+      options.solver.method != SolverMethod::classic && std::filesystem::is_directory(options.store.dir);
   std::optional<DirectoryLock> store_lock;
-  if (options.solver.method != SolverMethod::classic && std::filesystem::is_directory(options.store.dir))
+  if (reads_store)
     store_lock.emplace(options.store.dir, kLockFile, DirectoryLock::Role::reader, "store.dir",
                        "mpath-preprocess is writing this store; solve when it has finished");
-  StoreCheck check(options);
+  StoreCheck check(options, reads_store);
   const PreparedScene prepared = prepare_scene(options);
   const PatchMesh& mesh = prepared.mesh;
   const std::unique_ptr<BoxStore> store = open_store(options, mesh, check, record.timings);
