@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "coplanar_overlap.h"
@@ -151,6 +153,102 @@ TEST(SceneLoader, DropsRepeatedPolygonsAndWarnsOfReversedOnes) {
   ASSERT_EQ(w.size(), 2u);
   EXPECT_EQ(w[0].find("2 polygon(s) repeat an earlier one facing the same way"), 0u) << w[0];
   EXPECT_EQ(w[1].find("1 polygon(s) have the same vertices as another facing the other way"), 0u) << w[1];
+}
+
+// Random files (many seeds) of triangles and quads, some given again with
+// their corners rotated (the same surface) or reversed (its back), in any
+// order: what load_scene keeps, and its counts, match a pairwise check of
+// every polygon against the ones kept before it.
+TEST(SceneLoader, RepeatedPolygonsInRandomFilesMatchAPairwiseCheck) {
+  for (unsigned seed = 1; seed <= 25; ++seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> coord(0.0, 4.0);
+    std::vector<std::vector<int>> faces;  // 1-based vertex indices, in file order
+    std::string obj;
+    int vertices = 0;
+    const int distinct = 20 + static_cast<int>(seed % 7) * 10;
+    for (int i = 0; i < distinct; ++i) {
+      const int corners = 3 + static_cast<int>(rng() % 2);
+      std::vector<int> f;
+      // A quad's corners on one plane (a parallelogram), a triangle's anywhere.
+      const Vec3 a{coord(rng), coord(rng), coord(rng)}, b{coord(rng), coord(rng), coord(rng)},
+          c{coord(rng), coord(rng), coord(rng)};
+      std::vector<Vec3> corner = {a, b, c};
+      if (corners == 4) corner = {a, b, b + (c - a), c};
+      for (const Vec3& v : corner) {
+        obj += fmt::format("v {:.17g} {:.17g} {:.17g}\n", v.x, v.y, v.z);
+        f.push_back(++vertices);
+      }
+      faces.push_back(f);
+    }
+    const int repeats = 10 + static_cast<int>(rng() % 20);
+    for (int r = 0; r < repeats; ++r) {
+      std::vector<int> f = faces[rng() % faces.size()];  // possibly itself a repeat
+      std::rotate(f.begin(), f.begin() + static_cast<long>(rng() % f.size()), f.end());
+      if (rng() % 2) std::reverse(f.begin(), f.end());
+      faces.insert(faces.begin() + static_cast<long>(rng() % (faces.size() + 1)), f);
+    }
+    for (const auto& f : faces) {
+      obj += "f";
+      for (int v : f) obj += fmt::format(" {}", v);
+      obj += "\n";
+    }
+    // The pairwise check, on vertex indices: the same set of corners is the
+    // same polygon; the same cyclic order (either way round) says which side.
+    auto same_set = [](std::vector<int> x, std::vector<int> y) {
+      std::sort(x.begin(), x.end());
+      std::sort(y.begin(), y.end());
+      return x == y;
+    };
+    auto same_way = [](const std::vector<int>& x, const std::vector<int>& y) {
+      const size_t at = static_cast<size_t>(std::find(y.begin(), y.end(), x[0]) - y.begin());
+      return y[(at + 1) % y.size()] == x[1];
+    };
+    std::vector<std::vector<int>> kept;
+    size_t dropped = 0, reversed = 0;
+    for (const auto& f : faces) {
+      bool duplicate = false, back = false;
+      for (const auto& k : kept)
+        if (same_set(f, k)) (same_way(f, k) ? duplicate : back) = true;
+      if (duplicate) {
+        ++dropped;
+        continue;
+      }
+      if (back) ++reversed;
+      kept.push_back(f);
+    }
+    ASSERT_GT(dropped + reversed, 0u) << "seed " << seed;
+
+    TempDir dir;
+    write_file(dir / "d.mtl", "newmtl light\nKd 0.5 0.5 0.5\n");
+    write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\n" + obj);
+    SceneOptions o;
+    o.file = dir / "d.obj";
+    o.emitters["light"] = {1, 1, 1};
+    std::vector<std::string> w;
+    const Scene s = load_scene(o, 16, w);
+    ASSERT_EQ(s.polygons.size(), kept.size()) << "seed " << seed;
+    std::vector<Vec3> position;  // the file's vertices, to name the kept corners
+    for (size_t at = 0; (at = obj.find("v ", at)) != std::string::npos; ++at) {
+      Vec3 v;
+      std::sscanf(obj.c_str() + at, "v %lf %lf %lf", &v.x, &v.y, &v.z);
+      position.push_back(v);
+    }
+    for (size_t i = 0; i < kept.size(); ++i) {  // in file order, with the corners as given
+      ASSERT_EQ(s.polygons[i].vertices.size(), kept[i].size()) << "seed " << seed << ", polygon " << i;
+      for (size_t k = 0; k < kept[i].size(); ++k)
+        EXPECT_EQ(length(s.polygons[i].vertices[k] - position[static_cast<size_t>(kept[i][k] - 1)]), 0.0)
+            << "seed " << seed << ", polygon " << i;
+    }
+    const auto warned = [&](const std::string& start) {
+      for (const auto& m : w)
+        if (m.find(start) != std::string::npos) return std::stoul(m);
+      return 0ul;
+    };
+    EXPECT_EQ(warned("polygon(s) repeat an earlier one facing the same way"), dropped) << "seed " << seed;
+    EXPECT_EQ(warned("polygon(s) have the same vertices as another facing the other way"), reversed)
+        << "seed " << seed;
+  }
 }
 
 // Coplanar polygons facing the same way that share area are found; tiles

@@ -3,8 +3,8 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
-#include <map>
-#include <set>
+#include <numeric>
+#include <span>
 #include <vector>
 
 #include "coplanar_overlap.h"
@@ -72,30 +72,62 @@ struct Repeated {
 static Repeated drop_repeated_polygons(Scene& scene) {
   const Bounds bounds = scene.bounds();
   const double grid = 1e-9 * std::max(bounds.diagonal(), 1e-30);  // offsets from the corner stay below 1e9 steps
-  std::map<std::vector<std::array<long long, 3>>, std::vector<size_t>> seen;  // vertex set -> polygons kept
-  Repeated r;
-  std::vector<Polygon> kept;
-  kept.reserve(scene.polygons.size());
-  for (Polygon& p : scene.polygons) {
-    std::vector<std::array<long long, 3>> key;
-    key.reserve(p.vertices.size());
-    for (const Vec3& v : p.vertices)
-      key.push_back({std::llround((v.x - bounds.lo.x) / grid), std::llround((v.y - bounds.lo.y) / grid),
-                     std::llround((v.z - bounds.lo.z) / grid)});
-    std::sort(key.begin(), key.end());
-    auto& same = seen[std::move(key)];
-    const Vec3 n = newell_normal(p.vertices);
-    bool duplicate = false, reversed = false;
-    for (const size_t k : same) (dot(newell_normal(kept[k].vertices), n) > 0 ? duplicate : reversed) = true;
-    if (duplicate) {
-      ++r.dropped;
-      continue;
-    }
-    if (reversed) ++r.reversed;
-    same.push_back(kept.size());
-    kept.push_back(std::move(p));
+  using GridPoint = std::array<long long, 3>;
+  const size_t n = scene.polygons.size();
+  // Each polygon's vertices on the grid, sorted: polygon i's are
+  // points[start[i]] to points[start[i + 1]], all in one array (a map from
+  // vertex sets took an allocation or three per polygon).
+  std::vector<GridPoint> points;
+  std::vector<size_t> start(n + 1, 0);
+  for (size_t i = 0; i < n; ++i) {
+    start[i] = points.size();
+    for (const Vec3& v : scene.polygons[i].vertices)
+      points.push_back({std::llround((v.x - bounds.lo.x) / grid), std::llround((v.y - bounds.lo.y) / grid),
+                        std::llround((v.z - bounds.lo.z) / grid)});
+    std::sort(points.begin() + static_cast<long>(start[i]), points.end());
   }
-  scene.polygons = std::move(kept);
+  start[n] = points.size();
+  const auto vertex_set = [&](size_t i) {
+    return std::span<const GridPoint>(points.data() + start[i], start[i + 1] - start[i]);
+  };
+  const auto before = [&](size_t a, size_t b) {
+    const auto x = vertex_set(a), y = vertex_set(b);
+    return std::lexicographical_compare(x.begin(), x.end(), y.begin(), y.end());
+  };
+  // Polygons with the same vertex set next to each other, each run in file order.
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return before(a, b) || (!before(b, a) && a < b); });
+  Repeated r;
+  std::vector<uint8_t> dropped(n, 0);
+  std::vector<Vec3> kept_normals;  // of the run's polygons kept so far
+  for (size_t run = 0; run < n;) {
+    size_t end = run + 1;
+    while (end < n && !before(order[run], order[end])) ++end;
+    kept_normals.clear();
+    for (size_t k = run; end - run > 1 && k < end; ++k) {
+      const Vec3 normal = newell_normal(scene.polygons[order[k]].vertices);
+      bool duplicate = false, reversed = false;
+      for (const Vec3& m : kept_normals) (dot(m, normal) > 0 ? duplicate : reversed) = true;
+      if (duplicate) {
+        ++r.dropped;
+        dropped[order[k]] = 1;
+        continue;
+      }
+      if (reversed) ++r.reversed;
+      kept_normals.push_back(normal);
+    }
+    run = end;
+  }
+  if (r.dropped > 0) {
+    size_t kept = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (dropped[i]) continue;
+      if (kept != i) scene.polygons[kept] = std::move(scene.polygons[i]);  // never onto itself: that empties it
+      ++kept;
+    }
+    scene.polygons.resize(kept);
+  }
   return r;
 }
 

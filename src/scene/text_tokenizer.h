@@ -37,6 +37,7 @@ class TextTokenizer {
   std::ifstream in_;
   std::string path_;
   std::string buffer_;
+  std::string raw_;  // the physical line being read
   long line_ = 0;
   long next_line_ = 0;
 };
