@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -321,10 +322,20 @@ class Builder {
     });
     std::vector<Candidate> all;
     for (auto& local : found) all.insert(all.end(), local.begin(), local.end());
-    queue_ = std::priority_queue<Candidate>(std::less<Candidate>(), std::move(all));
-    while (!queue_.empty()) {
-      const Candidate c = queue_.top();
-      queue_.pop();
+    // The first candidates sorted once, best first, and the ones new groups
+    // bring in a queue: the best of the two fronts is taken each time, the
+    // same order as one queue of all (the order is total), without popping a
+    // heap of every pair (a quarter of OFFICE's build did that).
+    tbb::parallel_sort(all.begin(), all.end(), [](const Candidate& x, const Candidate& y) { return y < x; });
+    queue_ = {};
+    for (size_t next = 0; next < all.size() || !queue_.empty();) {
+      Candidate c;
+      if (queue_.empty() || (next < all.size() && queue_.top() < all[next])) {
+        c = all[next++];
+      } else {
+        c = queue_.top();
+        queue_.pop();
+      }
       if (!items_[c.a].alive || !items_[c.b].alive) continue;
       try_group(c);
     }
@@ -793,8 +804,18 @@ class Builder {
   std::vector<int> touched_;     // the items seen_ marks
   bool all_pairs_ = false;
   std::unique_ptr<LooseGrid> plain_, reach_;  // item boxes; item reaches
-  std::function<bool(int)> dead_ = [this](int i) { return !items_[i].alive; };
+  // Whether an item is no longer alive (merged into a group), for the grids'
+  // queries; a plain functor, not a std::function, so that it is inlined.
+  struct Dead {
+    const std::vector<Item>* items;
+    bool operator()(int i) const { return !(*items)[i].alive; }
+  };
+  Dead dead_{&items_};  // points into this builder: it is never copied (below)
   double eps_ = 0, scene_area_ = 0;
+
+ public:
+  Builder(const Builder&) = delete;
+  Builder& operator=(const Builder&) = delete;
 };
 
 }  // namespace
