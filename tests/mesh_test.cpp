@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <iterator>
+#include <random>
+
 #include "error.h"
 #include "test_util.h"
 
@@ -148,6 +152,41 @@ TEST(Mesh, ASceneOfDegeneratePolygonsOnlyIsAnError) {
       EXPECT_NE(std::string(e.what()).find("flat.obj: no polygon of the scene has an area (all 2 are degenerate"),
                 std::string::npos)
           << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mpath
+
+namespace mpath {
+namespace {
+
+// Bounds::extend gives what std::fmin and std::fmax give (it does their
+// work inline): random values, zeros of both signs, infinities and NaNs
+// (which neither lets into a bound), many seeds. Equal values compare
+// equal: which zero fmin(+0, -0) gives is left open by C, and GCC may swap
+// the operands of the call.
+TEST(Bounds, ExtendGivesWhatFminAndFmaxGive) {
+  const double special[] = {0.0, -0.0, 0.0, -0.0, 1.0, -1.0, INFINITY, -INFINITY, NAN, 1e-300, -1e300};
+  for (unsigned seed = 1; seed <= 20; ++seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> value(-10.0, 10.0);
+    Bounds b;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int k = 0; k < 200; ++k) {
+      Vec3 p;
+      // Odd seeds: special values only (zeros of both signs meeting a bound at zero); even: some among random ones.
+      for (int i = 0; i < 3; ++i)
+        p[i] = seed % 2 == 1 || rng() % 4 == 0 ? special[rng() % std::size(special)] : value(rng);
+      if (seed % 2 == 1 && k % 50 == 0) b = Bounds{}, lo[0] = lo[1] = lo[2] = INFINITY, hi[0] = hi[1] = hi[2] = -INFINITY;
+      b.extend(p);
+      for (int i = 0; i < 3; ++i) {
+        lo[i] = std::fmin(lo[i], p[i]);
+        hi[i] = std::fmax(hi[i], p[i]);
+        ASSERT_TRUE(b.lo[i] == lo[i]) << "seed " << seed << " step " << k << ": " << b.lo[i] << " against " << lo[i];
+        ASSERT_TRUE(b.hi[i] == hi[i]) << "seed " << seed << " step " << k << ": " << b.hi[i] << " against " << hi[i];
+      }
     }
   }
 }

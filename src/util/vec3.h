@@ -51,8 +51,9 @@ struct Bounds {
   Vec3 hi{-INFINITY, -INFINITY, -INFINITY};
 
   // std::fmin and std::fmax, inline (as calls into libm they took 5 % of a
-  // solve's start): equal values give p's (the sign of a zero included), and
-  // a NaN gives the other operand, as glibc's do.
+  // solve's start): a NaN gives the other operand, as theirs do, and of
+  // equal values p is taken (which zero fmin(+0, -0) gives, C leaves open).
+  // The bounds are never NaN unless every point was.
   void extend(const Vec3& p) {
     for (int i = 0; i < 3; ++i) {
       lo[i] = lo[i] < p[i] || p[i] != p[i] ? lo[i] : p[i];
