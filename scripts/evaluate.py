@@ -828,7 +828,7 @@ from this run's CSVs; what follows explains them, from the profiles in
   2026). What a first run saves is the lines classic casts after its first
   pass (1.6M more on office2 at 4M, 40 %) and what a lower error at equal
   lines buys; on office2, where the error ratio is above 0.9, that is
-  1.21x to 1.93x by budget (the per-scene table: above 1.5x at the small
+  1.11x to 1.87x by budget in the run of December 5 (the per-scene table: above 1.5x at the small
   budgets, where classic's fixed costs weigh more, near 1.2-1.3x at the
   large ones). A kept-store solve reads its first shot from the
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is the
