@@ -123,16 +123,21 @@ TEST(SceneLoader, AppliesConfigEmittersAndTwoSidedMaterialsByName) {
   }
 }
 
-// The warnings load_scene gives for an OBJ scene whose material "light" emits.
-std::vector<std::string> loader_warnings(const std::string& obj) {
+// load_scene on an OBJ scene (its statements after the material's) whose material "light" emits.
+Scene load_lit_obj(const std::string& obj, std::vector<std::string>& warnings) {
   TempDir dir;
   write_file(dir / "d.mtl", "newmtl light\nKd 0.5 0.5 0.5\n");
   write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\n" + obj);
   SceneOptions o;
   o.file = dir / "d.obj";
   o.emitters["light"] = {1, 1, 1};
+  return load_scene(o, 16, warnings);
+}
+
+// The warnings load_scene gives for such a scene.
+std::vector<std::string> loader_warnings(const std::string& obj) {
   std::vector<std::string> w;
-  load_scene(o, 16, w);
+  load_lit_obj(obj, w);
   return w;
 }
 
@@ -219,14 +224,8 @@ TEST(SceneLoader, RepeatedPolygonsInRandomFilesMatchAPairwiseCheck) {
     }
     ASSERT_GT(dropped + reversed, 0u) << "seed " << seed;
 
-    TempDir dir;
-    write_file(dir / "d.mtl", "newmtl light\nKd 0.5 0.5 0.5\n");
-    write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\n" + obj);
-    SceneOptions o;
-    o.file = dir / "d.obj";
-    o.emitters["light"] = {1, 1, 1};
     std::vector<std::string> w;
-    const Scene s = load_scene(o, 16, w);
+    const Scene s = load_lit_obj(obj, w);
     ASSERT_EQ(s.polygons.size(), kept.size()) << "seed " << seed;
     std::vector<Vec3> position;  // the file's vertices, to name the kept corners
     for (size_t at = 0; (at = obj.find("v ", at)) != std::string::npos; ++at) {
