@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <random>
 
 #include "coplanar_overlap.h"
@@ -145,15 +144,9 @@ std::vector<std::string> loader_warnings(const std::string& obj) {
 // dropped, with a warning; given the other way round it is kept back to
 // back, with a warning of its own.
 TEST(SceneLoader, DropsRepeatedPolygonsAndWarnsOfReversedOnes) {
-  TempDir dir;
-  write_file(dir / "d.mtl", "newmtl light\nKd 0.5 0.5 0.5\n");
-  write_file(dir / "d.obj", "mtllib d.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
-                            "f 1 2 3 4\nf 4 3 2 1\nf 2 3 4 1\nf 1 2 5\nf 3 4 1 2\n");
-  SceneOptions o;
-  o.file = dir / "d.obj";
-  o.emitters["light"] = {1, 1, 1};
   std::vector<std::string> w;
-  const Scene s = load_scene(o, 16, w);
+  const Scene s = load_lit_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n"
+                               "f 1 2 3 4\nf 4 3 2 1\nf 2 3 4 1\nf 1 2 5\nf 3 4 1 2\n", w);
   EXPECT_EQ(s.polygons.size(), 3u);  // the square, its reverse and the triangle
   ASSERT_EQ(w.size(), 2u);
   EXPECT_EQ(w[0].find("2 polygon(s) repeat an earlier one facing the same way"), 0u) << w[0];
@@ -169,8 +162,8 @@ TEST(SceneLoader, RepeatedPolygonsInRandomFilesMatchAPairwiseCheck) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> coord(0.0, 4.0);
     std::vector<std::vector<int>> faces;  // 1-based vertex indices, in file order
+    std::vector<Vec3> position;           // the file's vertices, to name the kept corners
     std::string obj;
-    int vertices = 0;
     const int distinct = 20 + static_cast<int>(seed % 7) * 10;
     for (int i = 0; i < distinct; ++i) {
       const int corners = 3 + static_cast<int>(rng() % 2);
@@ -182,7 +175,8 @@ TEST(SceneLoader, RepeatedPolygonsInRandomFilesMatchAPairwiseCheck) {
       if (corners == 4) corner = {a, b, b + (c - a), c};
       for (const Vec3& v : corner) {
         obj += fmt::format("v {:.17g} {:.17g} {:.17g}\n", v.x, v.y, v.z);
-        f.push_back(++vertices);
+        position.push_back(v);
+        f.push_back(static_cast<int>(position.size()));
       }
       faces.push_back(f);
     }
@@ -227,12 +221,6 @@ TEST(SceneLoader, RepeatedPolygonsInRandomFilesMatchAPairwiseCheck) {
     std::vector<std::string> w;
     const Scene s = load_lit_obj(obj, w);
     ASSERT_EQ(s.polygons.size(), kept.size()) << "seed " << seed;
-    std::vector<Vec3> position;  // the file's vertices, to name the kept corners
-    for (size_t at = 0; (at = obj.find("v ", at)) != std::string::npos; ++at) {
-      Vec3 v;
-      std::sscanf(obj.c_str() + at, "v %lf %lf %lf", &v.x, &v.y, &v.z);
-      position.push_back(v);
-    }
     for (size_t i = 0; i < kept.size(); ++i) {  // in file order, with the corners as given
       ASSERT_EQ(s.polygons[i].vertices.size(), kept[i].size()) << "seed " << seed << ", polygon " << i;
       for (size_t k = 0; k < kept[i].size(); ++k)

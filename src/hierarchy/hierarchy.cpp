@@ -471,6 +471,12 @@ class Builder {
     if (items_[i].area > 0) reach_->insert(i, reach(i));
   }
 
+  // Whether an item is no longer alive (merged into a group), for the grids'
+  // queries: a lambda, not a std::function, so that it is inlined.
+  auto dead() const {
+    return [this](int i) { return !items_[i].alive; };
+  }
+
   // Candidates of the new item `id` with every living item before it.
   void push_pairs(int id) {
     Candidate c;
@@ -486,8 +492,8 @@ class Builder {
       touched_.push_back(i);
       if (candidate(i, id, c)) queue_.push(c);
     };
-    plain_->query(reach(id), dead_, take);            // the smaller ones
-    reach_->query(items_[id].bounds, dead_, take);  // the larger ones
+    plain_->query(reach(id), dead(), take);            // the smaller ones
+    reach_->query(items_[id].bounds, dead(), take);  // the larger ones
     forget_seen();
   }
 
@@ -505,7 +511,7 @@ class Builder {
       for (size_t i = 0; i < items_.size(); ++i) take(static_cast<int>(i));
       return;
     }
-    for (const Bounds& r : regions) plain_->query(r, dead_, take);
+    for (const Bounds& r : regions) plain_->query(r, dead(), take);
   }
 
   // Clears the seen marks.
@@ -804,18 +810,7 @@ class Builder {
   std::vector<int> touched_;     // the items seen_ marks
   bool all_pairs_ = false;
   std::unique_ptr<LooseGrid> plain_, reach_;  // item boxes; item reaches
-  // Whether an item is no longer alive (merged into a group), for the grids'
-  // queries; a plain functor, not a std::function, so that it is inlined.
-  struct Dead {
-    const std::vector<Item>* items;
-    bool operator()(int i) const { return !(*items)[i].alive; }
-  };
-  Dead dead_{&items_};  // points into this builder: it is never copied (below)
   double eps_ = 0, scene_area_ = 0;
-
- public:
-  Builder(const Builder&) = delete;
-  Builder& operator=(const Builder&) = delete;
 };
 
 }  // namespace

@@ -97,7 +97,7 @@ static Repeated drop_repeated_polygons(Scene& scene) {
   // Polygons with the same vertex set next to each other, each run in file order.
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), size_t{0});
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return before(a, b) || (!before(b, a) && a < b); });
+  std::stable_sort(order.begin(), order.end(), before);
   Repeated r;
   std::vector<uint8_t> dropped(n, 0);
   std::vector<Vec3> kept_normals;  // of the run's polygons kept so far
