@@ -94,6 +94,7 @@ std::string checkpoint_key(const Options& options, const std::string& geometry) 
   Options o = options;
   o.solver.iterations = 0;
   o.solver.tolerance = 0;
+  o.solver.checkpoint_seconds = 0;  // when checkpoints are written, not what they hold
   o.output = {};
   o.cameras.clear();
   o.grids.clear();

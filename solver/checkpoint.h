@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <string>
 
+#include <spdlog/spdlog.h>
+
 #include "iteration.h"
 #include "config.h"
 #include "radiosity_state.h"
@@ -34,7 +36,9 @@ struct Checkpoint {
   std::string key;
   // Rank 0 writes it; with several MPI ranks the others hold the same state.
   void save(const RadiosityState& state, const IterationLog& log) const {
-    if (Ranks::root()) write_checkpoint(path, key, state, log);
+    if (!Ranks::root()) return;
+    write_checkpoint(path, key, state, log);
+    spdlog::debug("checkpoint after {} pass(es) written to {}", log.passes.size(), path.string());
   }
 };
 

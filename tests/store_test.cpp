@@ -199,6 +199,36 @@ TEST(Store, ResumeGivesTheUninterruptedResult) {
   EXPECT_NE(other.output.find("made with another scene, store or config"), std::string::npos) << other.output;
 }
 
+size_t count_of(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// solver.checkpoint_seconds = 0 writes a checkpoint after the first shot and
+// every pass; a long interval only after the first shot and the last pass,
+// which --resume continues from all the same.
+TEST(Store, CheckpointsFollowSolverCheckpointSeconds) {
+  TempDir dir;
+  const std::string store = " store.dir=" + (dir / "store").string();
+  ASSERT_EQ(preprocess(store).exit_code, 0);
+  const std::string run = store + " solver.tolerance=1e-12 solver.iterations=4 --log-level debug output.dir=";
+  RunResult r = solve(run + (dir / "every").string() + " solver.checkpoint_seconds=0");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (int passes = 0; passes <= 4; ++passes)
+    EXPECT_EQ(count_of(r.output, fmt::format("checkpoint after {} pass(es) written", passes)), 1u) << r.output;
+  r = solve(run + (dir / "ends").string() + " solver.checkpoint_seconds=1e6");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(count_of(r.output, "checkpoint after"), 2u) << r.output;
+  EXPECT_EQ(count_of(r.output, "checkpoint after 0 pass(es) written"), 1u) << r.output;
+  EXPECT_EQ(count_of(r.output, "checkpoint after 4 pass(es) written"), 1u) << r.output;
+  EXPECT_EQ(test::read_file(dir / "every/solution.ply"), test::read_file(dir / "ends/solution.ply"));
+  r = solve(store + " solver.tolerance=1e-12 solver.iterations=6 --resume --log-level info output.dir=" +
+            (dir / "ends").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("after 4 finished pass(es)"), std::string::npos) << r.output;
+}
+
 TEST(Store, ResumeAfterAKilledRunGivesTheUninterruptedResult) {
   TempDir dir;
   const std::string lines = " lines.total=1000000 store.chunk_lines=16384 first_shot.lines=400000";

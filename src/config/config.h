@@ -91,6 +91,10 @@ struct Options {
     // fewer chunks), merged in shard order: the answer does not depend on
     // the threads or MPI ranks that run them (docs/algorithm.md).
     int shards = 8;
+    // A checkpoint after the first shot, then after a pass only where the
+    // last was written at least this long ago (wall seconds; 0: after every
+    // pass), and after the last pass (docs/user-guide.md, "Checkpoints").
+    double checkpoint_seconds = 30;
   } solver;
 
   struct Store {

@@ -449,6 +449,10 @@ std::vector<ConfigKey> make_table() {
        "each pass's work in this many parts, merged in their order, so that threads and MPI ranks do not change the "
        "answer; at most this many threads or ranks share a pass, each part holding 64 bytes per face",
        SET(o.solver.shards = static_cast<int>(positive_at_most(get_integer(n, s), 4096, s))), GET(o.solver.shards)},
+      {"solver.checkpoint_seconds",
+       "checkpoint.bin is written after the first shot, after a pass that ends at least this many seconds after it "
+       "was last written, and after the last pass; 0: after every pass",
+       SET(o.solver.checkpoint_seconds = in_range(get_number(n, s), 0.0, 1e9, s)), GET(o.solver.checkpoint_seconds)},
       {"solver.adaptive_lines",
        "stored-line methods: later iterations take a share of each box's lines in proportion to the power it has left "
        "to send",
