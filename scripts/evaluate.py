@@ -828,9 +828,10 @@ from this run's CSVs; what follows explains them, from the profiles in
   2026). What a first run saves is the lines classic casts after its first
   pass (1.6M more on office2 at 4M, 40 %) and what a lower error at equal
   lines buys; on office2, where the error ratio is above 0.9, that is
-  1.11x to 1.87x by budget in the run of December 5 (the per-scene table: above 1.5x at the small
-  budgets, where classic's fixed costs weigh more, near 1.2-1.3x at the
-  large ones). A kept-store solve reads its first shot from the
+  1.15x to 2.12x by budget in the run of December 5 at 3972229 (the
+  per-scene table: above 1.5x at the small budgets, where classic's fixed
+  costs weigh more, 1.15-1.40x at the large ones; 1.11x to 1.87x in the
+  run before, at 3cb4996). A kept-store solve reads its first shot from the
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is the
   transport loop over the stored lines and little else; on office2 that
   loop is nearly stored Multipath's (the root and the trough's small box),
@@ -839,8 +840,11 @@ from this run's CSVs; what follows explains them, from the profiles in
   (docs/performance.md: office2's kept-store solve 0.286 -> 0.252 s from
   the huge pages alone, its page faults halved), and above it since the
   trough's box lowered the error (4.98x at 5587443, 5.22x at 6e74079,
-  5.13x at d684001 before the box), as the host's speed moves classic's
-  solves and the short hierarchical ones unequally. These times include each program's start-up (about 0.03 s with
+  5.13x at d684001 before the box; 6.30x at 3972229, where a solve no
+  longer writes its whole state after every pass, which the short
+  kept-store solves gained most from: docs/performance.md,
+  "Checkpoints"), as the host's speed moves classic's solves and the
+  short hierarchical ones unequally. These times include each program's start-up (about 0.03 s with
   the exec that asks for huge pages): at 1M lines that is a sixth of
   office2's kept-store solve.
 """

@@ -1,6 +1,8 @@
-// Checkpoints of a solve: the state after each finished iteration, written
-// atomically to output.dir/checkpoint.bin, so that `mpath-solve --resume`
-// continues an interrupted run and gets the uninterrupted result.
+// Checkpoints of a solve: the state after a finished iteration (the first
+// shot, then every solver.checkpoint_seconds or so, and the last pass:
+// run_iterations in solve.cpp), written atomically to
+// output.dir/checkpoint.bin, so that `mpath-solve --resume` continues an
+// interrupted run and gets the uninterrupted result.
 #pragma once
 
 #include <filesystem>

@@ -93,7 +93,7 @@ struct Options {
     int shards = 8;
     // A checkpoint after the first shot, then after a pass only where the
     // last was written at least this long ago (wall seconds; 0: after every
-    // pass), and after the last pass (docs/user-guide.md, "Checkpoints").
+    // pass), and after the last pass (docs/user-guide.md, on checkpoint.bin).
     double checkpoint_seconds = 30;
   } solver;
 
