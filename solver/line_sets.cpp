@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 
 #include "error.h"
 #include "line_order.h"
@@ -136,6 +137,7 @@ LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh) {
   for (size_t f = 0; f < faces; ++f)
     if (!face_shares(counts, sets.face_slot[f], sets.face_slot[f + 1], &sets.alpha[sets.face_slot[f]]))
       sets.uncarried.push_back(static_cast<int>(f));
+  sets.pool = std::make_shared<SetShardPool>();
   return sets;
 }
 
@@ -171,8 +173,7 @@ static_assert(sizeof(EntryInput) == 32 && sizeof(FaceIn) == 32);
 
 // A shard's private accumulators for one box's pass.
 struct EntryAcc {
-  double used = 0;   // fraction of the quota sent
-  double cap = 0;    // a part of the lines: the most this shard may send (of the entry's expected share)
+  double used = 0;  // fraction of the quota sent
 };
 struct FaceAcc {
   double phi_gain[3] = {0, 0, 0};
@@ -183,12 +184,19 @@ struct FaceLater {
   double later[3] = {0, 0, 0};
 };
 // All are summed over ranks as arrays of doubles.
-static_assert(sizeof(EntryAcc) == 2 * sizeof(double) && sizeof(FaceAcc) == 6 * sizeof(double) &&
+static_assert(sizeof(EntryAcc) == sizeof(double) && sizeof(FaceAcc) == 6 * sizeof(double) &&
               sizeof(FaceLater) == 3 * sizeof(double));
+// Taken from the pool (SetShardPool) for a pass, all zero, with at least
+// as many records as the box has entries and faces (`later` too where some
+// face's classes wait for a box above; not in the root's pass); the pass
+// uses the first `used_entries` / `used_faces` / `used_later` and its merge
+// sets them to zero again.
 struct alignas(128) SetShard {
   std::vector<EntryAcc> entries;
   std::vector<FaceAcc> faces;
-  std::vector<FaceLater> later;  // empty where no face's classes wait for a box above (the root's pass)
+  std::vector<FaceLater> later;
+  size_t used_entries = 0, used_faces = 0, used_later = 0;
+  double allowance = 0;  // a part of the lines: of each entry's expected share, the most this shard may send
   std::array<double, 3> absorbed{}, escaped{};
   uint64_t lines = 0, hits = 0;
   struct Send {
@@ -197,13 +205,76 @@ struct alignas(128) SetShard {
   };
   std::vector<Send> sends;
 
+  // How many zero records it lacks for a pass of these extents.
+  size_t lacking(size_t e, size_t f, size_t l) const {
+    const auto short_of = [](size_t have, size_t want) { return want > have ? want - have : 0; };
+    return short_of(entries.size(), e) * sizeof(EntryAcc) + short_of(faces.size(), f) * sizeof(FaceAcc) +
+           short_of(later.size(), l) * sizeof(FaceLater);
+  }
   void sum_over_ranks() {
-    Ranks::sum_records(entries);
-    Ranks::sum_records(faces);
-    Ranks::sum_records(later);
+    Ranks::sum_records(entries.data(), used_entries);
+    Ranks::sum_records(faces.data(), used_faces);
+    Ranks::sum_records(later.data(), used_later);
     sum_totals_over_ranks(absorbed, escaped, lines, hits);
   }
 };
+
+}  // namespace
+
+// A pass's shards come from here and go back after its merge, all zero:
+// allocating and clearing every shard's accumulators for every face of the
+// box in every pass was a third of the CPU time of a short kept-store solve
+// on soda (8 shards of its 107k-face root, about 12 MB each: the kernel's
+// page faults and clearing, then the clearing loops; docs/performance.md,
+// "Shard accumulators"). A shard grows to the largest box it serves and stays
+// so; boxes of one depth take theirs side by side, so the pool holds about
+// as many as the passes running at once need.
+struct SetShardPool {
+  // `n` shards for a pass of these extents: of the pooled ones, those that
+  // lack the fewest bytes (the smallest that fit), grown where they must be.
+  std::vector<SetShard> take(int n, size_t entries, size_t faces, size_t later) {
+    std::vector<SetShard> out;
+    out.reserve(static_cast<size_t>(n));
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      for (int k = 0; k < n && !free.empty(); ++k) {
+        size_t best = 0;
+        for (size_t i = 1; i < free.size(); ++i) {
+          const size_t li = free[i].lacking(entries, faces, later), lb = free[best].lacking(entries, faces, later);
+          if (li < lb || (li == lb && free[i].faces.size() < free[best].faces.size())) best = i;
+        }
+        out.push_back(std::move(free[best]));
+        free.erase(free.begin() + static_cast<std::ptrdiff_t>(best));
+      }
+    }
+    out.resize(static_cast<size_t>(n));
+    for (SetShard& a : out) {
+      if (a.entries.size() < entries) a.entries.resize(entries);
+      if (a.faces.size() < faces) a.faces.resize(faces);
+      if (a.later.size() < later) a.later.resize(later);
+      a.used_entries = entries;
+      a.used_faces = faces;
+      a.used_later = later;
+    }
+    return out;
+  }
+  // Back to the pool; the caller has set every record the pass used to zero.
+  void give(std::vector<SetShard>& shards) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    for (SetShard& a : shards) {
+      a.absorbed = {};
+      a.escaped = {};
+      a.lines = a.hits = 0;
+      free.push_back(std::move(a));
+    }
+    shards.clear();
+  }
+
+  std::mutex mutex;
+  std::vector<SetShard> free;
+};
+
+namespace {
 
 // Power `kept` at `face` for channel c, held for sending on: the share of
 // it the box's own classes carry goes along the face's next crossing in
@@ -226,6 +297,7 @@ struct PassContext {
   std::vector<FaceIn> faces;
   bool root;
   bool capped;  // a part of the lines: no shard sends more than its part of an entry's expected share
+  std::vector<double> expected;  // where capped, per entry: its expected share over the pass's lines
 };
 
 // Brings into the caches what transport_set_line will touch for a line
@@ -256,6 +328,7 @@ void prefetch_set_line(const PassContext& in, const SetShard& shard, const Event
             const FaceIn& f = in.faces[face];
             prefetch(&in.entries[f.entry]);
             prefetch(&shard.entries[f.entry]);
+            if (in.capped) prefetch(&in.expected[f.entry]);
           }
       break;
     default:
@@ -290,7 +363,7 @@ void transport_set_line(const PassContext& in, const Event* ev, int n, SetShard&
       EntryAcc& acc = shard.entries[e];
       FaceAcc& fa = shard.faces[face];
       double share = input.share;
-      if (in.capped) share = std::max(0.0, std::min(share, acc.cap - acc.used));
+      if (in.capped) share = std::max(0.0, std::min(share, in.expected[e] * shard.allowance - acc.used));
       acc.used += share;
       if (j >= 0 && j < n && touching(box, ev[i], ev[j])) {
         // Pressed against the next surface: the share stays with the face,
@@ -363,7 +436,7 @@ void pool_classes(const LineSets& sets, size_t face, uint32_t from, int to, int 
 }
 
 SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, RadiosityState& state, Flight& flight,
-                   int shards_wanted, unsigned pass, Progress& progress) {
+                   SetShardPool& pool, int shards_wanted, unsigned pass, Progress& progress) {
   const auto start = std::chrono::steady_clock::now();
   const StoreBox& box = store.box(x);
   const LineSetBox& lines = sets.boxes[x];
@@ -382,7 +455,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   SetResult result;
   if (parts.empty()) return result;  // the boxes above carry this box's classes in this pass
   const bool every_line = flight.fraction[x] >= 1.0;
-  PassContext in{&box, &lines, &sets, {}, {}, x == 0, !every_line};
+  PassContext in{&box, &lines, &sets, {}, {}, x == 0, !every_line, {}};
   const size_t faces = box.face_global.size();
   in.entries.resize(entries);
   for_each_record(entries, [&](size_t e) {
@@ -391,12 +464,12 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     for (int c = 0; c < ch; ++c) input.quota[c] = flight.quota[size_t{slot} * ch + c];
     input.share = flight.share[slot];
   });
-  // A part of the lines: each shard may send at most its part of an entry's expected share.
-  std::vector<double> expected;
+  // A part of the lines: each shard may send at most its part (its
+  // allowance) of an entry's expected share.
   if (in.capped) {
-    expected.resize(entries);
+    in.expected.resize(entries);
     for_each_record(entries, [&](size_t e) {
-      expected[e] = flight.fraction[x] * lines.carried[e] * flight.share[lines.slot[e]];
+      in.expected[e] = flight.fraction[x] * lines.carried[e] * flight.share[lines.slot[e]];
     });
   }
   in.faces.resize(faces);
@@ -418,16 +491,12 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   const uint64_t chunks = parts.size();
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(shards_wanted, chunks)));
-  std::vector<SetShard> acc(shards);
+  std::vector<SetShard> acc = pool.take(shards, entries, faces, waits ? faces : 0);
   run_shards(acc, [&](int s) {
     SetShard& a = acc[s];
-    a.entries.assign(entries, EntryAcc{});
-    a.faces.assign(faces, FaceAcc{});
-    a.later.assign(waits ? faces : 0, FaceLater{});
     if (in.capped) {
       const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
-      const double allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
-      for (uint32_t e = 0; e < entries; ++e) a.entries[e].cap = expected[e] * allowance;
+      a.allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
     }
   }, [&](int s) {
     SetShard& a = acc[s];
@@ -448,22 +517,30 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   // Merge in shard order: the quota sent; what was gathered and not sent
   // goes to the pools of the classes this box carries, what waits for the
   // boxes above to theirs. Faces write only their own slots: in parallel.
+  // What is read is set to zero again for the shards' next pass.
   for_each_record(faces, [&](size_t f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
     const uint32_t carried = lines.entry[f + 1] - lines.entry[f];
     for (uint32_t k = 0; k < carried; ++k) {
       const uint32_t e = lines.entry[f] + k, slot = lines.slot[e];
-      for (const SetShard& a : acc) flight.used[slot] += a.entries[e].used;
+      for (SetShard& a : acc) {
+        flight.used[slot] += a.entries[e].used;
+        a.entries[e] = EntryAcc{};
+      }
     }
     for (int c = 0; c < ch; ++c) {
       double gathered = 0, later = 0;
       for (const SetShard& a : acc) {
         state.phi[state.at(g, c)] += a.faces[f].phi_gain[c];
         gathered += a.faces[f].gathered[c];
-        if (!a.later.empty()) later += a.later[f].later[c];
+        if (waits) later += a.later[f].later[c];
       }
       if (gathered != 0) pool_classes(sets, g, 0, static_cast<int>(carried), ch, c, gathered, state.pooled);
       if (later != 0) pool_classes(sets, g, carried, -1, ch, c, later, state.pooled);
+    }
+    for (SetShard& a : acc) {
+      a.faces[f] = FaceAcc{};
+      if (waits) a.later[f] = FaceLater{};
     }
   });
   for (const SetShard& a : acc) {
@@ -474,6 +551,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
     result.stats.lines += a.lines;
     result.stats.hits += a.hits;
   }
+  pool.give(acc);
   result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
@@ -540,6 +618,8 @@ PassStats line_set_iteration(const PatchMesh& mesh, const TracerOnDemand& tracer
   const Hierarchy& h = store.hierarchy();
   const int ch = state.channels;
   assign_unshot(sets, state);
+  SetShardPool own;  // for line sets made without one: kept for this iteration alone
+  SetShardPool& pool = sets.pool ? *sets.pool : own;
   Flight flight;
   flight.quota.assign(sets.slots() * ch, 0.0);
   flight.used.assign(sets.slots(), 0.0);
@@ -559,7 +639,7 @@ PassStats line_set_iteration(const PatchMesh& mesh, const TracerOnDemand& tracer
     const std::vector<int>& boxes = at_depth[d];
     std::vector<SetResult> results(boxes.size());
     for_each_box(boxes.size(), [&](size_t k) {
-      results[k] = set_pass(store, sets, boxes[k], state, flight, shards_wanted, rotation, progress);
+      results[k] = set_pass(store, sets, boxes[k], state, flight, pool, shards_wanted, rotation, progress);
     });
     for (size_t k = 0; k < boxes.size(); ++k) {
       for (int c = 0; c < ch; ++c) {

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "box_store.h"
@@ -31,6 +32,9 @@ struct LineSetBox {
   std::vector<double> carried;    // per entry: this box's crossings that carry the entry's class at its face
 };
 
+// The passes' shard accumulators, kept from pass to pass (line_sets.cpp).
+struct SetShardPool;
+
 struct LineSets {
   std::vector<LineSetBox> boxes;
   std::vector<int> depth, parent;   // per box
@@ -38,6 +42,9 @@ struct LineSets {
   std::vector<double> alpha;        // per slot: the share of the face's power in that class
   std::vector<int> uncarried;       // faces no line can carry: shot with local lines
   size_t slots() const { return face_slot.back(); }
+  // Scratch of the passes, not data of the store: the shards' accumulators,
+  // zero between passes, so that a pass neither allocates nor clears them.
+  std::shared_ptr<SetShardPool> pool;
   // The smallest box holding boxes a and b (from these flat arrays: the passes' hot loop asks).
   int common_box(int a, int b) const {
     return common_ancestor(a, b, [this](int x) { return depth[x]; }, [this](int x) { return parent[x]; });

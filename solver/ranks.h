@@ -39,8 +39,13 @@ class Ranks {
   // The same for a vector of records made of doubles alone (accumulators).
   template <typename T>
   static void sum_records(std::vector<T>& records) {
+    sum_records(records.data(), records.size());
+  }
+  // The first `count` records at `records`.
+  template <typename T>
+  static void sum_records(T* records, size_t count) {
     static_assert(sizeof(T) % sizeof(double) == 0, "records of doubles alone");
-    if (!records.empty()) sum_raw(records.data(), records.size() * (sizeof(T) / sizeof(double)));
+    if (count > 0) sum_raw(records, count * (sizeof(T) / sizeof(double)));
   }
   // Whether MPI was built in.
   static bool built_with_mpi();
