@@ -1,6 +1,7 @@
 #include "line_sets.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -491,16 +492,10 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   const uint64_t chunks = parts.size();
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
   const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(shards_wanted, chunks)));
-  std::vector<SetShard> acc = pool.take(shards, entries, faces, waits ? faces : 0);
-  run_shards(acc, [&](int s) {
-    SetShard& a = acc[s];
-    if (in.capped) {
-      const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
-      a.allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
-    }
-  }, [&](int s) {
-    SetShard& a = acc[s];
+  const size_t later_faces = waits ? faces : 0;
+  const auto run_shard = [&](int s, SetShard& a) {
     const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
+    if (in.capped) a.allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
     stream_pass_lines(
         store, x, parts, lo, hi, pass, progress,
         [&](linestore::DecodedChunk& chunk, uint64_t c) { chunk_faces(box, chunk, x, c); },
@@ -513,45 +508,108 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
           prefetch_set_line(in, a, chunk.events.data() + chunk.first[l],
                             static_cast<int>(chunk.first[l + 1] - chunk.first[l]), distance);
         });
-  });
-  // Merge in shard order: the quota sent; what was gathered and not sent
-  // goes to the pools of the classes this box carries, what waits for the
-  // boxes above to theirs. Faces write only their own slots: in parallel.
-  // What is read is set to zero again for the shards' next pass.
-  for_each_record(faces, [&](size_t f) {
+  };
+  // The shards are merged in shard order: the quota each sent, the power it
+  // left on the faces, and into `total` what the faces gathered and did not
+  // send and what waits for the boxes above. Shard by shard, each face's sums
+  // are the same additions in the same order on any number of threads; what
+  // is read is set to zero again for the shard's next pass.
+  std::vector<SetShard> total = pool.take(1, 0, faces, later_faces);
+  SetShard& sum = total[0];
+  const auto merge_face = [&](SetShard& a, size_t f) {
     const size_t g = static_cast<size_t>(box.face_global[f]);
-    const uint32_t carried = lines.entry[f + 1] - lines.entry[f];
-    for (uint32_t k = 0; k < carried; ++k) {
-      const uint32_t e = lines.entry[f] + k, slot = lines.slot[e];
-      for (SetShard& a : acc) {
-        flight.used[slot] += a.entries[e].used;
-        a.entries[e] = EntryAcc{};
-      }
+    for (uint32_t e = lines.entry[f]; e < lines.entry[f + 1]; ++e) {
+      flight.used[lines.slot[e]] += a.entries[e].used;
+      a.entries[e] = EntryAcc{};
     }
     for (int c = 0; c < ch; ++c) {
-      double gathered = 0, later = 0;
-      for (const SetShard& a : acc) {
-        state.phi[state.at(g, c)] += a.faces[f].phi_gain[c];
-        gathered += a.faces[f].gathered[c];
-        if (waits) later += a.later[f].later[c];
-      }
-      if (gathered != 0) pool_classes(sets, g, 0, static_cast<int>(carried), ch, c, gathered, state.pooled);
-      if (later != 0) pool_classes(sets, g, carried, -1, ch, c, later, state.pooled);
+      state.phi[state.at(g, c)] += a.faces[f].phi_gain[c];
+      sum.faces[f].gathered[c] += a.faces[f].gathered[c];
+      if (waits) sum.later[f].later[c] += a.later[f].later[c];
     }
-    for (SetShard& a : acc) {
-      a.faces[f] = FaceAcc{};
-      if (waits) a.later[f] = FaceLater{};
-    }
-  });
-  for (const SetShard& a : acc) {
+    a.faces[f] = FaceAcc{};
+    if (waits) a.later[f] = FaceLater{};
+  };
+  const auto merge_totals = [&](const SetShard& a) {
     for (int c = 0; c < ch; ++c) {
       result.absorbed[c] += a.absorbed[c];
       result.escaped[c] += a.escaped[c];
     }
     result.stats.lines += a.lines;
     result.stats.hits += a.hits;
+  };
+  if (Ranks::size() > 1) {
+    // Every shard's accumulators are summed over the ranks before any is
+    // merged (ranks.h): all of them at once, merged face by face in parallel.
+    std::vector<SetShard> acc = pool.take(shards, entries, faces, later_faces);
+    run_shards(acc, [](int) {}, [&](int s) { run_shard(s, acc[s]); });
+    for_each_record(faces, [&](size_t f) {
+      for (SetShard& a : acc) merge_face(a, f);
+    });
+    for (const SetShard& a : acc) merge_totals(a);
+    pool.give(acc);
+  } else {
+    // One rank: the threads take shards in order, and whoever finishes the
+    // next shard to merge merges it (and any after it that are done) while
+    // the others go on, so that only about as many shards' accumulators as
+    // threads are alive at once, not every shard's (8 on any machine; on a
+    // root box of a million faces, 8 x 80 MB), and the merge overlaps the
+    // transport.
+    std::mutex mutex;
+    std::vector<SetShard> finished(static_cast<size_t>(shards));
+    std::vector<char> ready(static_cast<size_t>(shards), 0);
+    int next_merge = 0;
+    bool merging = false;
+    std::atomic<int> next_shard = 0;
+    const int workers = std::min(shards, tbb::this_task_arena::max_concurrency());
+    for_each_shard(workers, [&](int) {
+      for (int s; (s = next_shard.fetch_add(1)) < shards;) {
+        std::vector<SetShard> mine = pool.take(1, entries, faces, later_faces);
+        run_shard(s, mine[0]);
+        {
+          const std::lock_guard<std::mutex> lock(mutex);
+          finished[static_cast<size_t>(s)] = std::move(mine[0]);
+          ready[static_cast<size_t>(s)] = 1;
+          if (merging) continue;
+          merging = true;
+        }
+        for (;;) {
+          SetShard* a = nullptr;
+          {
+            const std::lock_guard<std::mutex> lock(mutex);
+            if (next_merge < shards && ready[static_cast<size_t>(next_merge)]) {
+              a = &finished[static_cast<size_t>(next_merge)];
+            } else {
+              merging = false;
+              break;
+            }
+          }
+          for (size_t f = 0; f < faces; ++f) merge_face(*a, f);
+          merge_totals(*a);
+          std::vector<SetShard> done(1);
+          done[0] = std::move(*a);
+          pool.give(done);
+          const std::lock_guard<std::mutex> lock(mutex);
+          ++next_merge;
+        }
+      }
+    });
   }
-  pool.give(acc);
+  // What the faces gathered and did not send goes to the pools of the
+  // classes this box carries, what waits for the boxes above to theirs.
+  // Faces write only their own slots: in parallel.
+  for_each_record(faces, [&](size_t f) {
+    const size_t g = static_cast<size_t>(box.face_global[f]);
+    const uint32_t carried = lines.entry[f + 1] - lines.entry[f];
+    for (int c = 0; c < ch; ++c) {
+      const double gathered = sum.faces[f].gathered[c], later = waits ? sum.later[f].later[c] : 0.0;
+      if (gathered != 0) pool_classes(sets, g, 0, static_cast<int>(carried), ch, c, gathered, state.pooled);
+      if (later != 0) pool_classes(sets, g, carried, -1, ch, c, later, state.pooled);
+    }
+    sum.faces[f] = FaceAcc{};
+    if (waits) sum.later[f] = FaceLater{};
+  });
+  pool.give(total);
   result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
