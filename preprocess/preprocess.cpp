@@ -3,7 +3,6 @@
 #include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/global_control.h>
 #include <tbb/parallel_pipeline.h>
 
 #include <atomic>
@@ -16,6 +15,7 @@
 #include "box_file.h"
 #include "directory_lock.h"
 #include "error.h"
+#include "on_threads.h"
 #include "hash.h"
 #include "hierarchy.h"
 #include "json_text.h"
@@ -248,10 +248,11 @@ void add_first_shot(const Options& options, const PreparedScene& prepared, Prepr
 
 }  // namespace
 
-PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, bool dry_run, bool print_hierarchy) {
+namespace {
+
+PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& shard, bool dry_run,
+                                      bool print_hierarchy, int threads) {
   const auto start = clock::now();
-  const int threads = effective_threads(options);
-  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   spdlog::info("mpath-preprocess {} ({}), shard {}/{}, {} thread(s)", MPATH_VERSION, MPATH_GIT_COMMIT, shard.index,
                shard.count, threads);
   PreparedScene prepared = prepare_scene(options);
@@ -348,6 +349,13 @@ PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, b
   if (shard.count > 1 && !stats.manifest_written)
     spdlog::info("store not complete yet: manifest.json is written when every shard of {} has finished", shard.count);
   return stats;
+}
+
+}  // namespace
+
+PreprocessStats run_preprocess(const Options& options, const ShardSpec& shard, bool dry_run, bool print_hierarchy) {
+  const int threads = effective_threads(options);
+  return run_on_threads(threads, [&] { return preprocess_on_threads(options, shard, dry_run, print_hierarchy, threads); });
 }
 
 }  // namespace mpath

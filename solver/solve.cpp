@@ -1,7 +1,6 @@
 #include "solve.h"
 
 #include <spdlog/spdlog.h>
-#include <tbb/global_control.h>
 #include <tbb/task_group.h>
 
 #include <chrono>
@@ -9,6 +8,7 @@
 
 #include "atomic_file.h"
 #include "checkpoint.h"
+#include "on_threads.h"
 #include "classic.h"
 #include "directory_lock.h"
 #include "error.h"
@@ -248,14 +248,15 @@ void write_outputs(const Options& options, const PatchMesh& mesh, const TracerOn
 
 }  // namespace
 
-void run_solve(const Options& options, const SolveFlags& flags) {
+namespace {
+
+void solve_on_threads(const Options& options, const SolveFlags& flags, int threads) {
   const auto start = clock::now();
   SolveRecord record;
   record.command_line = flags.command_line;
-  record.threads = effective_threads(options);
+  record.threads = threads;
   record.ranks = Ranks::size();
   if (!Ranks::root()) spdlog::set_level(spdlog::level::err);  // rank 0 logs and warns for all
-  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(record.threads));
   spdlog::info("mpath-solve {} ({}), method {}, {} thread(s){}", MPATH_VERSION, MPATH_GIT_COMMIT,
                to_string(options.solver.method), record.threads,
                record.ranks > 1 ? fmt::format(" on each of {} MPI ranks", record.ranks) : "");
@@ -311,6 +312,13 @@ void run_solve(const Options& options, const SolveFlags& flags) {
   const nlohmann::json report = solve_report(options, prepared, state, store.get(), record);
   write_text_file(options.output.dir / "report.json", json_text(report));
   spdlog::info("results in {} ({:.2f} s in all)", options.output.dir.string(), seconds_since(start));
+}
+
+}  // namespace
+
+void run_solve(const Options& options, const SolveFlags& flags) {
+  const int threads = effective_threads(options);
+  run_on_threads(threads, [&] { solve_on_threads(options, flags, threads); });
 }
 
 }  // namespace mpath

@@ -443,11 +443,13 @@ std::vector<ConfigKey> make_table() {
        GET(o.solver.iterations)},
       {"solver.tolerance", "stop when (unshot power + power held in ARs) / emitted power falls below this",
        SET(o.solver.tolerance = in_range(get_number(n, s), 0.0, 1.0, s)), GET(o.solver.tolerance)},
-      {"solver.threads", "worker threads; 0 uses every hardware thread",
+      {"solver.threads", "worker threads; 0 uses every hardware thread; more than the cores are started as asked",
        SET(o.solver.threads = static_cast<int>(in_range(get_integer(n, s), 0, 4096, s))), GET(o.solver.threads)},
       {"solver.shards",
        "each pass's work in this many parts, merged in their order, so that threads and MPI ranks do not change the "
-       "answer; at most this many threads or ranks share a pass, each part holding 64 bytes per face",
+       "answer; at most this many threads or ranks share a pass; each part holds 64 bytes per face (the "
+       "hierarchical method: 50-100 bytes per face of its box, and on one rank only about as many parts as threads "
+       "at once)",
        SET(o.solver.shards = static_cast<int>(positive_at_most(get_integer(n, s), 4096, s))), GET(o.solver.shards)},
       {"solver.checkpoint_seconds",
        "checkpoint.bin is written after the first shot, after a pass that ends at least this many seconds after it "
