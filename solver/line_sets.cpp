@@ -222,14 +222,14 @@ struct alignas(128) SetShard {
 
 }  // namespace
 
-// A pass's shards come from here and go back after its merge, all zero:
-// allocating and clearing every shard's accumulators for every face of the
-// box in every pass was a third of the CPU time of a short kept-store solve
-// on soda (8 shards of its 107k-face root, about 12 MB each: the kernel's
-// page faults and clearing, then the clearing loops; docs/performance.md,
-// "Shard accumulators"). A shard grows to the largest box it serves and stays
-// so; boxes of one depth take theirs side by side, so the pool holds about
-// as many as the passes running at once need.
+// A pass's shards come from here and go back after its merge, all zero, so
+// that a pass neither allocates nor clears them (on soda's 107k-face root
+// 8 shards of about 12 MB were allocated and cleared every pass: the
+// clearing loops, and fresh pages, were a visible part of a short kept-store
+// solve's profile; docs/performance.md, "Shard accumulators"). A shard grows
+// to the largest box it serves and stays so; boxes of one depth take theirs
+// side by side, so the pool holds about as many as the passes running at
+// once need.
 struct SetShardPool {
   // `n` shards for a pass of these extents: of the pooled ones, those that
   // lack the fewest bytes (the smallest that fit), grown where they must be.
