@@ -798,7 +798,9 @@ from this run's CSVs; what follows explains them, from the profiles in
   more lines than the store holds (its later passes), and its error falls
   with lines on both sides (12 % at 1M to about 4.4 % at 8M).
 - **Where a target is not met** (BIG ROOM's first run; office2's
-  first run meets its 1.5x at the median but not at every budget).
+  first run, 1.45x at the median in the run of December 5 at adafc87 and
+  1.60x in the one before at 3972229, on either side of its 1.5x and
+  below it at the large budgets).
   A first run spends about four fifths of its time preprocessing, the
   first shot it traces for the store included (the table above); the
   preprocess's profile (BIG ROOM, docs/performance.md) is Embree's tracing
@@ -828,10 +830,10 @@ from this run's CSVs; what follows explains them, from the profiles in
   2026). What a first run saves is the lines classic casts after its first
   pass (1.6M more on office2 at 4M, 40 %) and what a lower error at equal
   lines buys; on office2, where the error ratio is above 0.9, that is
-  1.15x to 2.12x by budget in the run of December 5 at 3972229 (the
+  1.11x to 1.87x by budget in the run of December 5 at adafc87 (the
   per-scene table: above 1.5x at the small budgets, where classic's fixed
-  costs weigh more, 1.15-1.40x at the large ones; 1.11x to 1.87x in the
-  run before, at 3cb4996). A kept-store solve reads its first shot from the
+  costs weigh more, below it at the large ones; 1.15x to 2.12x at
+  3972229, 1.11x to 1.87x at 3cb4996). A kept-store solve reads its first shot from the
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is the
   transport loop over the stored lines and little else; on office2 that
   loop is nearly stored Multipath's (the root and the trough's small box),
