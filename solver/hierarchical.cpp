@@ -536,10 +536,7 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::
     for (int f : reached) {
       if (f < 0) continue;
       FaceAccumulator& a = acc.faces[static_cast<size_t>(f)];
-      for (int c = 0; c < ch; ++c) {
-        state.unshot[state.at(static_cast<size_t>(f), c)] += a.gathered[c];
-        state.phi[state.at(static_cast<size_t>(f), c)] += a.phi_gain[c];
-      }
+      add_face_gains(a, static_cast<size_t>(f), state);
       a = FaceAccumulator{};
     }
     for (int c = 0; c < ch; ++c) {

@@ -136,11 +136,7 @@ namespace {
 void merge_gains(const std::vector<ShardAccumulator>& acc, RadiosityState& state) {
   const int ch = state.channels;
   for_each_record(state.faces, [&](size_t f) {
-    for (const ShardAccumulator& a : acc)
-      for (int c = 0; c < ch; ++c) {
-        state.unshot[state.at(f, c)] += a.faces[f].gathered[c];
-        state.phi[state.at(f, c)] += a.faces[f].phi_gain[c];
-      }
+    for (const ShardAccumulator& a : acc) add_face_gains(a.faces[f], f, state);
   });
   for (const ShardAccumulator& a : acc)
     for (int c = 0; c < ch; ++c) {

@@ -70,6 +70,14 @@ struct alignas(128) ShardAccumulator {
   void sum_over_ranks();
 };
 
+// Adds what face `f` gathered and its Phi gain in `a` to the state.
+inline void add_face_gains(const FaceAccumulator& a, size_t f, RadiosityState& state) {
+  for (int c = 0; c < state.channels; ++c) {
+    state.unshot[state.at(f, c)] += a.gathered[c];
+    state.phi[state.at(f, c)] += a.phi_gain[c];
+  }
+}
+
 // Sums a shard's energy terms and line counts over the MPI ranks.
 void sum_totals_over_ranks(std::array<double, 3>& absorbed, std::array<double, 3>& escaped, uint64_t& lines,
                            uint64_t& hits);
