@@ -8,9 +8,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "error.h"
 #include "hash.h"
+#include "nearest_point.h"
 #include "ranks.h"
 #include "progress.h"
 #include "store_identity.h"
@@ -140,15 +142,21 @@ Vec3 patch_centre(const PatchMesh& mesh, const Patch& p) {
 // its object facing within 45 degrees of it.
 std::vector<int> face_proxies(const PatchMesh& mesh, const SceneBox& sb, const StoreBox& box) {
   std::vector<int> proxy(box.face_global.size(), -1);
-  std::map<std::pair<int, int>, std::vector<int>> by_polygon, by_object;  // (polygon or object, side) -> patches
+  // (polygon or object, side) -> its crossed patches, and the search over
+  // their centres, made when a face first asks.
+  struct Group {
+    std::vector<int> patches;
+    std::optional<NearestPoint> centres;
+  };
+  std::map<std::pair<int, int>, Group> by_polygon, by_object;
   for (size_t k = 0; k < box.local_faces.size(); ++k)
     for (int side = 0; side < 2; ++side) {
       const int f = box.local_faces[k][side];
       if (f < 0 || !(box.face_crossings[f] > 0)) continue;
       proxy[f] = f;
       const Patch& p = mesh.patches[sb.patches[k]];
-      by_polygon[{p.polygon, side}].push_back(static_cast<int>(k));
-      by_object[{p.object, side}].push_back(static_cast<int>(k));
+      by_polygon[{p.polygon, side}].patches.push_back(static_cast<int>(k));
+      by_object[{p.object, side}].patches.push_back(static_cast<int>(k));
     }
   for (size_t k = 0; k < box.local_faces.size(); ++k)
     for (int side = 0; side < 2; ++side) {
@@ -156,17 +164,19 @@ std::vector<int> face_proxies(const PatchMesh& mesh, const SceneBox& sb, const S
       if (f < 0 || proxy[f] >= 0) continue;
       const Patch& patch = mesh.patches[sb.patches[k]];
       const Vec3 c = patch_centre(mesh, patch);
-      auto nearest = [&](const std::vector<int>& candidates, double min_cos) {
-        double best = INFINITY;
-        for (int j : candidates) {
-          const Patch& q = mesh.patches[sb.patches[j]];
-          if (dot(q.normal, patch.normal) < min_cos) continue;
-          const Vec3 d = patch_centre(mesh, q) - c;
-          if (dot(d, d) < best) {
-            best = dot(d, d);
-            proxy[f] = box.local_faces[j][side];
-          }
+      // The nearest crossed patch of the group whose normal is within
+      // acos(min_cos) of this one's (NaN cosines not refused, as before).
+      auto nearest = [&](Group& g, double min_cos) {
+        if (!g.centres) {
+          std::vector<Vec3> centres;
+          centres.reserve(g.patches.size());
+          for (int j : g.patches) centres.push_back(patch_centre(mesh, mesh.patches[sb.patches[j]]));
+          g.centres.emplace(std::move(centres));
         }
+        const int i = g.centres->nearest(c, [&](int i) {
+          return !(dot(mesh.patches[sb.patches[g.patches[i]]].normal, patch.normal) < min_cos);
+        });
+        if (i >= 0) proxy[f] = box.local_faces[g.patches[i]][side];
       };
       if (auto it = by_polygon.find({patch.polygon, side}); it != by_polygon.end()) nearest(it->second, -2.0);
       if (proxy[f] < 0)
