@@ -552,15 +552,45 @@ uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::
 PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer,
                            const BoxStore& store, RadiosityState& state, const IterationLog& log, unsigned pass,
                            int shards_wanted, std::vector<BoxPassStats>* per_box, uint64_t* uncarried) {
-  if (const LineSets* sets = store.line_sets())
-    return line_set_iteration(mesh, tracer, store, *sets, state, pass, shards_wanted, line_power(options, store, log),
+  if (const LineSets* sets = store.line_sets()) {
+    double power_per_line = line_power(options, store, log);
+    const int passes_left = options.solver.iterations - static_cast<int>(log.passes.size());
+    if (power_per_line > 0 && full_pass_pays(log, store.lines(), state.emitted_total(), mesh.face_count(),
+                                             options.solver.tolerance, passes_left))
+      power_per_line = 0;
+    return line_set_iteration(mesh, tracer, store, *sets, state, pass, shards_wanted, power_per_line,
                               options.lines.seed, per_box, uncarried);
+  }
   PassStats p = hierarchical_iteration(store, state, pass, shards_wanted, line_power(options, store, log),
                                        options.solver.schedule == "v-cycle", per_box);
   const uint64_t shot = shoot_uncarried(mesh, tracer, store, state, pass, options.lines.seed, shards_wanted);
   if (uncarried) *uncarried += shot;
   p.unshot_fraction = state.remaining_fraction();
   return p;
+}
+
+bool full_pass_pays(const IterationLog& log, uint64_t store_lines, double emitted, size_t faces, double tolerance,
+                    int passes_left) {
+  if (log.passes.size() < 2 || !(emitted > 0) || log.first_unshot <= 0) return false;
+  const PassStats& first = log.passes.front();
+  const PassStats& last = log.passes.back();
+  if (first.lines < store_lines || last.lines >= store_lines) return false;  // a full pass to weigh a partial one against
+  const double left = last.unshot_fraction, before_last = log.passes[log.passes.size() - 2].unshot_fraction;
+  const double need = std::log(left / tolerance);  // the factor still to go, as a logarithm
+  if (!(need > 0)) return false;
+  // Passes of either kind to get there, at the factor each took last, and
+  // their cost in crossings: a pass's own, and about 16 for every face of
+  // the scene for the work around it (its inputs, the merge, the pools:
+  // measured as 13 to 17 on ROOM, BIG ROOM and OFFICE from the seconds of
+  // full and partial passes of one solve).
+  const auto passes = [&](double before, double after) {
+    const double factor = std::log(before / after);
+    return factor > 0 ? std::ceil(need / factor) : static_cast<double>(INFINITY);
+  };
+  const double overhead = 16.0 * static_cast<double>(faces);
+  const double partial = passes(before_last, left), full = passes(log.first_unshot / emitted, first.unshot_fraction);
+  if (partial > passes_left && full <= passes_left) return true;
+  return full * (static_cast<double>(first.hits) + overhead) < partial * (static_cast<double>(last.hits) + overhead);
 }
 
 double line_power(const Options& options, const BoxStore& store, const IterationLog& log) {

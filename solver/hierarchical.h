@@ -40,6 +40,18 @@ struct BoxPassStats {
 // Multipath casts fewer lines in later passes (docs/algorithm.md).
 double line_power(const Options& options, const BoxStore& store, const IterationLog& log);
 
+// Whether the next iteration should take every stored line, with adaptive
+// lines: when, at the factors by which the last (partial) pass and the
+// first (every line) took the power left down, full passes would bring it
+// below `tolerance` for less work than partial ones, or partial ones would
+// need more than `passes_left`. A partial pass moves a face's received
+// power on only where the face has a later crossing among the lines it
+// takes, so on scenes of many faces a few lines each (OFFICE at 2M lines)
+// thin passes took the power down by 10-40 % each and ran into the
+// iteration cap, where one full pass took it down tenfold.
+bool full_pass_pays(const IterationLog& log, uint64_t store_lines, double emitted, size_t faces, double tolerance,
+                    int passes_left);
+
 // Where the power still to distribute is (W, summed over channels), and how
 // much of it no stored line can carry (faces without a crossed proxy, ARs
 // without a target): that part stays whatever the iterations do.

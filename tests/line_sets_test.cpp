@@ -10,6 +10,8 @@
 #include <numbers>
 
 #include "config.h"
+#include "hierarchical.h"
+#include "iteration.h"
 #include "line_sets.h"
 #include "prepared_scene.h"
 #include "preprocess.h"
@@ -221,6 +223,95 @@ TEST(LineSets, HighReflectanceConvergesLikeMultipath) {
   EXPECT_NEAR(h.mean, 0.0, 0.01);
   EXPECT_LT(h.abs_error, 1.2 * m.abs_error) << "multipath " << m.abs_error;
   EXPECT_LT(h.worst_residual, 1e-10);
+}
+
+// Finely meshed (a few stored lines per face), later passes that take a
+// part of the lines (solver.adaptive_lines, the default) must not stall:
+// each shard sends a face's power only up to its part, so the faces few
+// lines cross keep most of theirs a pass, and a subscene below the root's
+// coverage takes no line, so the classes only its lines carry wait. Such
+// passes are taken only where they send as much per line as a full one;
+// the solve then needs at most 1.5x the iterations of full passes (before,
+// it stalled with 0.35 % of the power waiting in the shade on every seed)
+// and its reflected power is theirs.
+TEST(LineSets, PartialPassesDoNotStallOnFineMeshes) {
+  TempDir dir;
+  for (const int seed : {1, 2, 3}) {
+    // A furnished room of a random layout, lit by a lamp in its shade (a
+    // subscene: the power the shade holds for its own classes moves only
+    // along its own lines).
+    const auto stem = dir / ("room" + std::to_string(seed));
+    const test::RunResult made = test::run(std::string(MPATH_PYTHON) + " " + MPATH_SOURCE_DIR +
+                                           "/scripts/make_room.py room " + stem.string() + " --seed " +
+                                           std::to_string(seed));
+    ASSERT_EQ(made.exit_code, 0) << made.output;
+    const auto solve = [&](bool adaptive) {
+      Options o = test::test_options(300'000, 100'000, 0.002);
+      o.scene.file = stem.string() + ".obj";
+      o.scene.two_sided = {"lampshade"};
+      o.store.dir = dir / ("s" + std::to_string(seed) + (adaptive ? "a" : "f"));
+      o.solver.method = SolverMethod::hierarchical;
+      o.solver.adaptive_lines = adaptive;
+      o.solver.iterations = 40;
+      o.lines.sequence = "halton";
+      return test::solve_stored(o);
+    };
+    const test::StoredSolve a = solve(true), f = solve(false);
+    EXPECT_GE(a.boxes, 2u) << "seed " << seed;
+    EXPECT_TRUE(f.log.converged) << "seed " << seed;
+    EXPECT_TRUE(a.log.converged) << "seed " << seed << ": " << a.state.remaining_fraction() << " left after "
+                                 << a.log.passes.size() << " iterations";
+    EXPECT_LE(a.log.passes.size(), 1.5 * f.log.passes.size()) << "seed " << seed;
+    EXPECT_LT(std::fabs(a.state.energy_residual()) / a.state.emitted_total(), 1e-10);
+    // The same stored lines: the two answers differ by the passes' plans alone.
+    ASSERT_EQ(a.mesh.face_count(), f.mesh.face_count());
+    double area = 0, diff = 0, total = 0;
+    for (size_t k = 0; k < a.mesh.face_count(); ++k) {
+      const double w = a.mesh.face_area(static_cast<int>(k));
+      const double ra = a.state.radiosity(a.mesh, k)[0] - a.state.face_exitance(k)[0];
+      const double rf = f.state.radiosity(f.mesh, k)[0] - f.state.face_exitance(k)[0];
+      area += w;
+      diff += w * (ra - rf);
+      total += w * rf;
+    }
+    EXPECT_LT(std::fabs(diff / total), 5e-3) << "seed " << seed << ": reflected power, adaptive against full passes";
+  }
+}
+
+// The choice between a partial and a full next pass, on logs shaped as
+// OFFICE's at 2M lines (86,662 faces): a first pass of every line took the
+// power left from 0.45 to 0.032 of the emitted with 10.9M crossings, then
+// partial passes of 1.6M crossings took it down by 1.6x, 1.2x, ...
+TEST(LineSets, AFullPassIsTakenWhereItReachesTheToleranceForLessWork) {
+  const uint64_t lines = 2'000'000;
+  const size_t faces = 86'662;
+  const auto log_of = [&](std::vector<std::pair<uint64_t, double>> partial) {
+    IterationLog log;
+    log.first_unshot = 0.45 * 100.0;  // W, of 100 W emitted
+    log.passes.push_back(PassStats{1, lines, 10'867'158, 0.3, 0.032});
+    for (const auto& [hits, left] : partial)
+      log.passes.push_back(PassStats{static_cast<int>(log.passes.size()) + 1, 246'858, hits, 0.08, left});
+    return log;
+  };
+  // Too few passes to weigh, or the last one took every line: no judgement.
+  EXPECT_FALSE(full_pass_pays(log_of({}), lines, 100.0, faces, 1e-3, 100));
+  IterationLog full = log_of({{1'607'648, 0.0146}});
+  full.passes.push_back(PassStats{3, lines, 10'867'158, 0.3, 0.0089});
+  EXPECT_FALSE(full_pass_pays(full, lines, 100.0, faces, 1e-3, 100));
+  // A thin pass that took the power down by 1.6x: five more of them (15M
+  // crossings with the work around them) against one full pass (12.3M).
+  EXPECT_TRUE(full_pass_pays(log_of({{1'607'648, 0.0146}, {1'605'393, 0.00887}}), lines, 100.0, faces, 1e-3, 100));
+  // Close to the tolerance, one thin pass is enough.
+  EXPECT_FALSE(full_pass_pays(log_of({{1'607'648, 0.0146}, {1'605'393, 0.00125}}), lines, 100.0, faces, 1e-3, 100));
+  // Thin passes that take it down fast enough stay.
+  EXPECT_FALSE(full_pass_pays(log_of({{1'607'648, 0.0146}, {1'605'393, 0.0020}}), lines, 100.0, faces, 1e-3, 100));
+  // ... unless they would not get there within the iterations left.
+  EXPECT_TRUE(full_pass_pays(log_of({{1'607'648, 0.0146}, {1'605'393, 0.0040}}), lines, 100.0, faces, 1e-3, 1));
+  // A thin pass that moved nothing.
+  EXPECT_TRUE(full_pass_pays(log_of({{1'607'648, 0.0146}, {1'605'393, 0.0146}}), lines, 100.0, faces, 1e-3, 100));
+  // Below the tolerance already, or nothing emitted: nothing to choose.
+  EXPECT_FALSE(full_pass_pays(log_of({{1'607'648, 0.0146}, {1'605'393, 0.0009}}), lines, 100.0, faces, 1e-3, 100));
+  EXPECT_FALSE(full_pass_pays(log_of({{1'607'648, 0.0146}, {1'605'393, 0.00887}}), lines, 0.0, faces, 1e-3, 100));
 }
 
 // With no line in any subscene (lines.root_fraction = 1) every class is

@@ -457,7 +457,8 @@ std::vector<ConfigKey> make_table() {
        SET(o.solver.checkpoint_seconds = in_range(get_number(n, s), 0.0, 1e9, s)), GET(o.solver.checkpoint_seconds)},
       {"solver.adaptive_lines",
        "stored-line methods: later iterations take a share of each box's lines in proportion to the power it has left "
-       "to send",
+       "to send (with the hierarchy's line sets a larger share, or every line, where that sends more power per line "
+       "or reaches solver.tolerance for less work)",
        SET(o.solver.adaptive_lines = get_bool(n, s)), GET(o.solver.adaptive_lines)},
       {"solver.schedule",
        "hierarchical: `\"v-cycle\"` (subscenes deepest first, the root, then top-down) or `\"top-down\"` (the paper's "
