@@ -687,7 +687,6 @@ double expected_sent(const LineSets& sets, const std::vector<double>& slot_power
   return power > 0 ? expected / power : 1.0;
 }
 
-
 }  // namespace
 
 // Which lines each box takes this iteration, and what one carrying crossing
@@ -732,9 +731,9 @@ void plan_iteration(const BoxStore& store, const LineSets& sets, const Radiosity
   // solve stalled. A subscene below the root's coverage takes no line, and
   // the classes only its lines carry wait (on ROOM meshed to 63k faces with
   // 300k lines, 0.35 % of the emitted power waited there for good). Of the
-  // passes that take `wanted` of the lines, twice
-  // that, four times, ... and all of them, the one expected to send the
-  // most power per line taken (the fewest lines among equals).
+  // passes that take `wanted` of the lines, twice that, four times, ... and
+  // all of them, the one expected to send the most power per line taken
+  // (the fewest lines among equals).
   std::vector<char> carriable(sets.slots(), 0);
   for (const LineSetBox& lines : sets.boxes)
     for (size_t e = 0; e < lines.slot.size(); ++e) carriable[lines.slot[e]] |= lines.carried[e] > 0;
