@@ -319,7 +319,7 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shar
   const uint64_t chunks = in.parts.size();
   const bool every_line = in.fraction >= 1.0;
   const uint64_t pass_lines = part_lines(in.parts, 0, chunks);
-  const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(shards_wanted, chunks)));
+  const int shards = pass_shards(shards_wanted, chunks);
   std::vector<BoxShard> acc(shards);
   run_shards(acc, [&](int s) {
     BoxShard& a = acc[s];

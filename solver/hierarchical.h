@@ -112,6 +112,12 @@ struct ChunkPart {
 // the last. Every line when `fraction` is 1.
 std::vector<ChunkPart> pass_parts(const BoxStore& store, int b, double fraction, unsigned pass);
 
+// A box pass's shards: one per chunk it reads, at most `shards_wanted`
+// (solver.shards), at least one.
+inline int pass_shards(int shards_wanted, size_t chunks) {
+  return static_cast<int>(std::max<size_t>(1, std::min<size_t>(static_cast<size_t>(shards_wanted), chunks)));
+}
+
 // Lines in parts [lo, hi).
 inline uint64_t part_lines(const std::vector<ChunkPart>& parts, uint64_t lo, uint64_t hi) {
   uint64_t n = 0;

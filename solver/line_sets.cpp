@@ -491,7 +491,7 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   });
   const uint64_t chunks = parts.size();
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
-  const int shards = static_cast<int>(std::max<uint64_t>(1, std::min<uint64_t>(shards_wanted, chunks)));
+  const int shards = pass_shards(shards_wanted, chunks);
   const size_t later_faces = waits ? faces : 0;
   const auto run_shard = [&](int s, SetShard& a) {
     const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
@@ -741,7 +741,7 @@ void plan_iteration(const BoxStore& store, const LineSets& sets, const Radiosity
     std::vector<int> shards(boxes, 1);
     uint64_t taken = 0;
     for (size_t x = 0; x < boxes; ++x) {
-      shards[x] = static_cast<int>(std::max<size_t>(1, std::min<size_t>(shards_wanted, flight.parts[x].size())));
+      shards[x] = pass_shards(shards_wanted, flight.parts[x].size());
       for (const ChunkPart& p : flight.parts[x]) taken += p.lines;
     }
     const double sent = expected_sent(sets, slot_power, carriable, flight.fraction, shards);
