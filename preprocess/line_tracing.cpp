@@ -60,8 +60,17 @@ ChunkTracer::ChunkTracer(const Options& options, const PatchMesh& mesh, const Hi
   }
   child_offset_.push_back(offset);
   class_span_ = hierarchy.class_span(box);
-  if (class_span_ > 0)
-    for (int p : box_.patches) owner_.push_back(hierarchy.patch_box[static_cast<size_t>(p)]);
+  if (class_span_ > 0) {
+    for (int p : box_.patches) {
+      const auto& faces = mesh.patch_faces[static_cast<size_t>(p)];
+      owner_.push_back({hierarchy.patch_box[static_cast<size_t>(p)],
+                        static_cast<uint8_t>((faces[0] == kInvisibleSide ? 1 : 0) | (faces[1] == kInvisibleSide ? 2 : 0))});
+    }
+    for (const SceneBox& b : hierarchy.boxes) {
+      box_depth_.push_back(b.depth);
+      box_parent_.push_back(b.parent);
+    }
+  }
 }
 
 linestore::DecodedChunk TracedChunk::stored() const {
@@ -83,8 +92,25 @@ void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore
   // both patches (off the line: the outside, the root's); a subscene's line
   // leaving it carries no pair. Counted on the side of patch i that faces
   // crossing i + dir, as the solver's face_towards picks it.
-  const auto depth = [&](int x) { return hierarchy_.boxes[x].depth; };
-  const auto common = [&](int x, int y) { return hierarchy_.common_box(x, y); };
+  const auto depth = [&](int x) { return box_depth_[static_cast<size_t>(x)]; };
+  const auto common = [&](int x, int y) {
+    return x == y ? x : common_ancestor(x, y, depth, [&](int z) { return box_parent_[static_cast<size_t>(z)]; });
+  };
+  // A line's crossings: the box holding each patch and whether the side
+  // towards either end is an invisible back, read once from owner_.
+  thread_local std::vector<Owner> on_line;
+  on_line.resize(static_cast<size_t>(n));
+  bool invisible = false;
+  for (int i = 0; i < n; ++i) {
+    Owner o = owner_[events[i].id];
+    // Bit 0: the side facing +1 (along the line) is invisible; bit 1: the side facing -1.
+    if (!events[i].along) o.invisible = static_cast<uint8_t>(((o.invisible & 1) << 1) | (o.invisible >> 1));
+    invisible |= o.invisible != 0;
+    on_line[static_cast<size_t>(i)] = o;
+  }
+  const auto seen_towards = [&](int x, int d) {
+    return (on_line[static_cast<size_t>(x)].invisible >> (d > 0 ? 0 : 1)) & 1 ? kInvisibleSide : 0;
+  };
   // The counters a line adds to are first found and brought into the caches,
   // then added to: added to as found, each waited for the one before
   // (the counters of a box's patches are megabytes, met at random).
@@ -92,12 +118,10 @@ void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore
   counters.clear();
   for (int i = 0; i < n; ++i)
     for (const int dir : {+1, -1}) {
-      // Without invisible backs in the box the next crossing seen is the next one.
-      const int j = tracer_.any_invisible()
-                        ? next_seen(i, dir, n, [&](int x, int d) { return towards(events[x], d); })
-                        : i + dir;
-      const int k = pair_class(owner_[events[i].id], j < 0 || j >= n ? -1 : owner_[events[j].id], box_index_ == 0,
-                               depth, common);
+      // Without invisible backs on the line the next crossing seen is the next one.
+      const int j = invisible ? next_seen(i, dir, n, seen_towards) : i + dir;
+      const int k = pair_class(on_line[static_cast<size_t>(i)].box,
+                               j < 0 || j >= n ? -1 : on_line[static_cast<size_t>(j)].box, box_index_ == 0, depth, common);
       if (k < 0) continue;
       const int side = (dir > 0) == events[i].along ? 0 : 1;
       uint32_t* c = &counts.class_crossings[(size_t{events[i].id} * 2 + side) * class_span_ + static_cast<size_t>(k)];

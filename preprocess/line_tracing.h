@@ -72,7 +72,15 @@ class ChunkTracer {
   uint64_t total_, chunk_lines_, chunks_;
   std::vector<uint32_t> child_offset_;  // first AR of each child in the child-crossing counts
   int class_span_ = 0;                  // transparent boxes: classes counted per patch side
-  std::vector<int> owner_;              // transparent boxes: per patch of the box, the box holding it
+  // Transparent boxes, per patch of the box (local id): the box holding it
+  // and which of its sides are invisible backs (bit s: side s), so that the
+  // class counts read one small table instead of the mesh's face records.
+  struct Owner {
+    int box;
+    uint8_t invisible;
+  };
+  std::vector<Owner> owner_;
+  std::vector<int> box_depth_, box_parent_;  // transparent boxes: the hierarchy's, by box
 };
 
 }  // namespace mpath
