@@ -30,6 +30,11 @@ struct LineSetBox {
   std::vector<uint32_t> entry;    // per local face: its first entry (its own box's class); entry[faces]: entries
   std::vector<uint32_t> slot;     // per entry: its slot in LineSets (face and class)
   std::vector<double> carried;    // per entry: this box's crossings that carry the entry's class at its face
+  // The distinct values of `carried`, increasing, and per entry the index of
+  // its value there: a partial pass's plan weighs each value once, not once
+  // per entry (line_sets.cpp, expected_sent).
+  std::vector<double> distinct;
+  std::vector<uint32_t> rank;
 };
 
 // The passes' shard accumulators, kept from pass to pass (line_sets.cpp).
