@@ -132,8 +132,14 @@ class Scene:
                    faces=rep["scene"]["faces"], polygons=rep["scene"]["polygons"],
                    energy_residual=rep["energy"]["relative_residual"], threads=rep["mpath"]["threads"],
                    escaped=rep["energy"]["escaped"] / rep["energy"]["emitted"])
-        if method != "classic" and not self.args.keep_stores:  # the solution is what is measured
-            shutil.rmtree(store, ignore_errors=True)
+        if method != "classic":
+            # The boxes beside the solution (where the error lies, by box; the store goes).
+            manifest = json.load(open(os.path.join(store, "manifest.json")))
+            boxes = [{k: b[k] for k in ("depth", "parent", "lines", "patches", "direct_objects")}
+                     for b in manifest["boxes"]]
+            write_atomically(os.path.join(out, "boxes.json"), json.dumps(boxes))
+            if not self.args.keep_stores:  # the solution is what is measured
+                shutil.rmtree(store, ignore_errors=True)
         return row, out
 
     def compare(self, out, reference, name, images=False, scale=0.2):
@@ -233,6 +239,52 @@ def object_bias(scene, refs, rows):
                     "object_max_z_diff" + key: float(diff[worst]),
                     "object_noise" + key: float(np.sqrt(np.mean(noise[keep] ** 2)))})
     return out
+
+
+def error_by_box(scene, rows):
+    """Where the squared error lies, box by box: at the images' budget, the
+    area-weighted squared error of the reflected radiosity against the long
+    classic run, summed over the faces of the objects each box holds directly
+    (the boxes of the first seed's hierarchical store), for classic and the
+    hierarchical runs, summed over the seeds. Rows for the CSV."""
+    import numpy as np
+    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    from solution import read_solution
+    lines = scene.budgets[min(1, len(scene.budgets) - 1)]
+    first = os.path.join(scene.work, "hierarchical-%d-%d" % (lines, scene.seeds[0]))
+    if not os.path.exists(os.path.join(first, "boxes.json")):
+        return []
+    boxes = json.load(open(os.path.join(first, "boxes.json")))
+
+    def reflected(f):
+        return np.stack([f["B_" + c].astype(float) - f["emit_" + c].astype(float) for c in "rgb"])
+    ref = read_solution(os.path.join(scene.work, "reference-classic", "solution.ply"))
+    area, objects = ref["area"].astype(float), ref["object"].astype(int)
+    box_of = np.zeros(objects.max() + 1, dtype=int)
+    for i, b in enumerate(boxes):
+        box_of[[o for o in b["direct_objects"] if o <= objects.max()]] = i
+    face_box = box_of[objects]
+    r = reflected(ref)
+    sq = {}
+    for method in ("classic", "hierarchical"):
+        sq[method] = np.zeros(len(boxes))
+        for seed in scene.seeds:
+            out = os.path.join(scene.work, "%s-%d-%d" % (method, lines, seed))
+            if not any(x["method"] == method and x["lines"] == lines and x["seed"] == seed for x in rows):
+                continue
+            f = read_solution(os.path.join(out, "solution.ply"))
+            sq[method] += np.bincount(face_box, weights=area * np.square(reflected(f) - r).sum(axis=0),
+                                      minlength=len(boxes))
+    total = {m: sq[m].sum() for m in sq}
+    all_lines = sum(b["lines"] for b in boxes)
+    return [{"scene": scene.name, "lines": lines, "box": i, "depth": b["depth"], "objects": len(b["direct_objects"]),
+             "faces": int((face_box == i).sum()), "area": float(area[face_box == i].sum()),
+             "line_share": b["lines"] / all_lines if all_lines else 0.0,
+             "classic_share": sq["classic"][i] / total["classic"] if total["classic"] > 0 else 0.0,
+             "hierarchical_share": sq["hierarchical"][i] / total["hierarchical"] if total["hierarchical"] > 0 else 0.0,
+             "hierarchical_over_classic": sq["hierarchical"][i] / sq["classic"][i] if sq["classic"][i] > 0 else float("nan"),
+             "total_ratio": total["hierarchical"] / total["classic"] if total["classic"] > 0 else float("nan")}
+            for i, b in enumerate(boxes)]
 
 
 def error_images(scene, args, rows):
@@ -452,14 +504,14 @@ def fmt_speedup(s, key):
     return v
 
 
-def document(args, runs, speed, memory, bias, figures, meta):
+def document(args, runs, speed, memory, bias, by_box, figures, meta):
     L = []
     w = L.append
     w("# Results: hierarchical against classic Multipath")
     w("")
     w("Written by `bash scripts/evaluate` (%s, %s) on %s." % (meta["date"], meta["duration"], meta["machine"]))
     w("mpath commit %s, %s solver thread(s), Embree %s. Every number below comes from the CSV files in"
-      " `docs/benchmarks/` (`results_runs.csv`: every run; `results_speedup.csv`; `results_memory.csv`) that the same"
+      " `docs/benchmarks/` (`results_runs.csv`: every run; `results_speedup.csv`; `results_memory.csv`; `results_error_by_box.csv`) that the same"
       " command wrote; rerun it to regenerate this page." % (meta["commit"], meta["threads"], meta["embree"]))
     w("")
     w("## What was run")
@@ -572,6 +624,8 @@ def document(args, runs, speed, memory, bias, figures, meta):
         if "objects" in b:
             w(object_note(b))
             w("")
+        for line in box_note([r for r in by_box if r["scene"] == scene["name"]], meta.get("seeds", args.seeds)):
+            w(line)
     w("## Speed-up at equal error and the targets")
     w("")
     w(verdicts(speed, meta["scenes"]))
@@ -675,6 +729,26 @@ def object_note(b):
     return ("Object by object (the %d objects with 1 %% of the reflected power or more; an object's total has far"
             " less noise than a patch; noise from the ladder's runs against their own reference, scaled to the"
             " references' lines): %s." % (b["objects"], "; ".join(parts)))
+
+
+def box_note(rows, seeds):
+    """The table of where the squared error lies, box by box."""
+    if not rows:
+        return []
+    out = ["Where the error lies, box by box (%s lines, seeds %s summed; the boxes of the first seed's store, a box's"
+           " faces those of the objects it holds directly, the root's the rest): each method's share of its own squared"
+           " error of the reflected radiosity against the long classic run, and the hierarchical squared error over"
+           " classic's in that box (over all boxes: %.2f, the square of the error ratio at equal lines):" % (
+               "{:,}".format(rows[0]["lines"]), ", ".join(str(s) for s in seeds), rows[0]["total_ratio"]),
+           "",
+           "| box | depth | objects | faces | area | hier. lines | classic's squared error | hier.'s squared error |"
+           " hier. / classic there |",
+           "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        out.append("| %d | %d | %d | %s | %.2f | %.1f %% | %.1f %% | %.1f %% | %.2f |" % (
+            r["box"], r["depth"], r["objects"], "{:,}".format(r["faces"]), r["area"], 100 * r["line_share"],
+            100 * r["classic_share"], 100 * r["hierarchical_share"], r["hierarchical_over_classic"]))
+    return out + [""]
 
 
 def verdicts(speed, scenes):
@@ -902,6 +976,8 @@ def main():
     if args.report_only:
         runs = read_csv(os.path.join(bench, "results_runs.csv"))
         bias = {b["scene"]: b for b in read_csv(os.path.join(bench, "results_bias.csv"))}
+        by_box_path = os.path.join(bench, "results_error_by_box.csv")
+        by_box = read_csv(by_box_path) if os.path.exists(by_box_path) else []
         meta = json.load(open(meta_path))
         # The error images again from the kept runs, where they are still there.
         images = {}
@@ -909,7 +985,7 @@ def main():
             sc = Scene(scene["name"], SCENES[scene["name"]], args)
             images[scene["name"]] = error_images(sc, args, [r for r in runs if r["scene"] == scene["name"]])
     else:
-        runs, bias, images, scenes = [], {}, {}, []
+        runs, bias, images, scenes, by_box = [], {}, {}, [], []
         for name in args.scenes.split(","):
             if name not in SCENES:
                 sys.exit("evaluate: unknown scene %r (known: %s)" % (name, ", ".join(SCENES)))
@@ -919,6 +995,7 @@ def main():
                 continue
             scene = Scene(name, spec, args)
             rows, b, imgs = evaluate_scene(scene, args)
+            by_box += error_by_box(scene, rows)
             runs += rows
             bias[name] = b
             images[name] = imgs
@@ -926,6 +1003,7 @@ def main():
                            "reference_lines": scene.reference_lines})
         write_csv(os.path.join(bench, "results_runs.csv"), runs)
         write_csv(os.path.join(bench, "results_bias.csv"), list(bias.values()))
+        write_csv(os.path.join(bench, "results_error_by_box.csv"), by_box)
         embree = json.load(open(os.path.join(args.work, scenes[0]["name"], "reference-classic", "report.json")))["mpath"]
         meta = {"date": datetime.date.today().isoformat(), "machine": machine(), "commit": built_from,
                 "threads": runs[0]["threads"], "embree": embree["embree"], "scenes": scenes,
@@ -978,7 +1056,7 @@ def main():
                 plot_error_images(imgs, lines, scene["title"], stem)
             if os.path.exists(stem + ".png"):
                 figures["images"][scene["name"]] = os.path.relpath(stem + ".png", args.docs)
-    text = document(args, runs, speed, memory, bias, figures, meta)
+    text = document(args, runs, speed, memory, bias, by_box, figures, meta)
     path = os.path.join(args.docs, "results.md")
     write_atomically(path, text)
     log("wrote %s, %s and the figures in %s" % (path, bench, figs))
