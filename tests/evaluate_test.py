@@ -73,6 +73,22 @@ def main():
                 path = os.path.join(docs, "figures", "%s.%s" % (stem, ext))
                 check(os.path.exists(path) and os.path.getsize(path) > 1000, "%s written" % path)
             check("figures/%s.png" % stem in text, "results.md shows %s" % stem)
+        # Where the error lies, box by box, at the larger budget: every face in
+        # one box, each method's shares adding up to one, and the squared errors'
+        # total ratio the square of the two runs' relative RMS errors that
+        # mpath-compare measured (the same sums, computed apart).
+        boxes = list(csv.DictReader(open(os.path.join(docs, "benchmarks", "results_error_by_box.csv"))))
+        hier = [r for r in runs if r["method"] == "hierarchical" and r["lines"] == "1200000"][0]
+        check(len(boxes) == int(hier["boxes"]) and int(hier["boxes"]) > 1,
+              "a row per box of the store (%d rows, %s boxes)" % (len(boxes), hier["boxes"]))
+        check(sum(int(b["faces"]) for b in boxes) == int(hier["faces"]), "every face in one box")
+        for key in ("classic_share", "hierarchical_share", "line_share"):
+            total = sum(float(b[key]) for b in boxes)
+            check(abs(total - 1) < 1e-9, "the boxes' %s add up to one (%r)" % (key, total))
+        want = (float(hier["rel_rms_classic_ref"]) / float(classic["rel_rms_classic_ref"])) ** 2
+        got = float(boxes[0]["total_ratio"])
+        check(abs(got / want - 1) < 1e-4, "the boxes' squared errors are mpath-compare's (ratio %r, compare's %r)" % (got, want))
+        check("Where the error lies, box by box (1,200,000 lines" in text, "results.md has the box table")
         # Redrawn from the CSVs alone, the document says the same.
         r = subprocess.run(cmd + ["--report-only"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         check(r.returncode == 0, "--report-only runs: " + r.stdout[-500:])
