@@ -871,79 +871,76 @@ from this run's CSVs; what follows explains them, from the profiles in
   equal lines; its first run is faster all the same, since classic casts
   more lines than the store holds (its later passes), and its error falls
   with lines on both sides (12 % at 1M to about 4.4 % at 8M).
-- **Later passes that pay** (December 6 2026, bec174b). With adaptive
-  lines a partial pass moves little of the power of faces that few of its
-  lines cross, and on OFFICE at 2M lines the solve used to stop at its
-  iteration cap (20) with 1.1e-3 of the power left; the passes now take
-  every line where that reaches the tolerance for less work
-  (docs/algorithm.md, "Partial passes that pay"), and OFFICE's 2M-line
-  solve converges in 4 iterations (about 1.0 s here against 1.75 s in the
-  run before, the same error). The other scenes' plans are unchanged: the
-  same lines and the same errors, bit for bit. BIG ROOM's hierarchical
-  runs took 12-16 % longer to preprocess and 25-30 % longer to solve than
-  in the run before (code the change does not touch, identical errors)
-  while its classic runs did not move, so its first-run median fell from
-  1.84x to the figure above: the host, not the code (side by side on the
-  same 2M-line stores, this build's BIG ROOM iterations took 0.22 s and
-  the build before's 0.22-0.23 s). Classic's own adaptive passes do not
-  always converge within the configs' cap (`solver.iterations = 20` in
-  configs/office.toml and configs/room.toml): all of OFFICE's classic runs
-  and 9 of ROOM's 15 stop there with 0.1-0.5 % of the emitted power
-  unshot (report.json, `iterations.unshot_fraction`); their times are
-  those of 20 passes and their errors include the missing power, small
-  beside their noise.
-- **Where a target is not met** (BIG ROOM's first run; office2's
-  first run, 1.47x at the median in this run, 1.45x in the run of
-  December 5 at adafc87 and 1.60x in the one before at 3972229, on either
-  side of its 1.5x and below it at the large budgets).
-  A first run spends about four fifths of its time preprocessing, the
-  first shot it traces for the store included (the table above); the
-  preprocess's profile (BIG ROOM, docs/performance.md) is Embree's tracing
-  40 %, zstd 12 % at level 6 (the chunks' default until December 2026;
-  level 3 now, which took 4-7 % off the preprocess's CPU seconds for stores
-  2-3 % larger), line generation 8 %, encoding 6 %, the class counts
-  4.5 %: per line about what a classic pass costs, so a first run's
-  speed-up at equal error is roughly one over the square of the error ratio
-  at equal lines, less what a first run costs beyond a classic solve of the
-  same lines. That ratio is 0.57-0.64 on OFFICE, 0.67-0.77 on ROOM and BIG
-  ROOM, and 0.91-0.98 on office2 (1.01-1.09 until its fluorescent strip's
-  12-polygon trough became a box of its own in December 2026, docs/algorithm.md,
-  "Bright subscenes": that box holds the error that the trough, bright and
-  small, held; the first run's median went from 1.29x to the figure above
-  and the kept-store solve's from 5.13x). On BIG ROOM a ratio of 0.70-0.77
-  bounds the first run near 1/0.73^2 = 1.9x before the preprocess's own
-  cost; 2.5x needs a lower error at equal lines, which needs the error out
-  of the root: its pilot keeps 89 % of the lines in the root, where the
-  walls' exchanges with the rest of the room are carried. The rest of
-  office2's error is in its walls, ceiling and desks, lit by a strip that
-  lights the whole room, which only the root's lines carry (the pilot keeps
-  94 % of the lines there). Both sides trace near Embree's limit: on office2
-  classic's passes ran at 85 % of Embree's raw all-hit rate and the
-  preprocess at 83 % (docs/performance.md, the limit benchmark), and at 4M
-  lines classic's first pass took 1.08 s for its 4M lines where the
-  preprocess's box took 1.15 s for the same count (2 threads, December
-  2026). What a first run saves is the lines classic casts after its first
-  pass (1.6M more on office2 at 4M, 40 %) and what a lower error at equal
-  lines buys; on office2, where the error ratio is above 0.9, that is
-  1.11x to 1.87x by budget in the run of December 5 at adafc87 (the
-  per-scene table: above 1.5x at the small budgets, where classic's fixed
-  costs weigh more, below it at the large ones; 1.15x to 2.12x at
-  3972229, 1.11x to 1.87x at 3cb4996). A kept-store solve reads its first shot from the
-  store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is the
-  transport loop over the stored lines and little else; on office2 that
-  loop is nearly stored Multipath's (the root and the trough's small box),
-  and its kept-store solve is near 5x since the passes decode each chunk
-  straight into their order and the programs ask for huge pages
-  (docs/performance.md: office2's kept-store solve 0.286 -> 0.252 s from
-  the huge pages alone, its page faults halved), and above it since the
-  trough's box lowered the error (4.98x at 5587443, 5.22x at 6e74079,
-  5.13x at d684001 before the box; 6.30x at 3972229, where a solve no
-  longer writes its whole state after every pass, which the short
-  kept-store solves gained most from: docs/performance.md,
-  "Checkpoints"), as the host's speed moves classic's solves and the
-  short hierarchical ones unequally. These times include each program's start-up (about 0.03 s with
-  the exec that asks for huge pages): at 1M lines that is a sixth of
-  office2's kept-store solve.
+- **Where the error lies.** The table under each scene splits each
+  method's squared error by box. Wherever the hierarchy gives a small
+  bright box lines of its own (a lamp in its shade: ROOM's, BIG ROOM's,
+  OFFICE's two table lamps, office2's strip, office3's desk lamp), the
+  squared error there falls to 0.12-0.26 of classic's (soda's hanging
+  lamps, with 0.3 % of the lines, stay near classic's). Everywhere else
+  (the root's walls, and the large boxes of furniture that take few or no
+  lines of their own) it stays at 1.0-1.6 times classic's (more in boxes
+  that hold a negligible share of either): there the
+  hierarchical runs have the root's lines only, a share of the lines that
+  classic spends on the whole scene in its first pass and again in its
+  later ones. A scene's error ratio at equal lines is set by how much of
+  classic's squared error sits in such bright boxes.
+- **Later passes that pay** (since bec174b). With adaptive lines a partial
+  pass moves little of the power of faces that few of its lines cross.
+  Where every line reaches `solver.tolerance` for less work, the passes now
+  take every line (docs/algorithm.md, "Partial passes that pay"), and
+  OFFICE's 2M-line solve converges in 4 iterations. Since 5fd17c4 the plan
+  of a partial pass weighs each distinct crossing count once instead of
+  every entry. It was a fifth of each of OFFICE's 8M-line partial passes
+  (docs/performance.md, "The plan of a partial pass").
+
+  Classic's own adaptive passes do not always converge within the configs'
+  cap (`solver.iterations = 20` in configs/office.toml and
+  configs/room.toml): OFFICE's classic runs and most of ROOM's stop there
+  with 0.1-0.5 % of the emitted power unshot (report.json,
+  `iterations.unshot_fraction`). Their times are those of 20 passes, and
+  their errors include the missing power, which is small beside their
+  noise.
+- **Where a target is not met: BIG ROOM's first run.** A first run spends
+  about four fifths of its time preprocessing, the first shot it traces
+  for the store included (the table above). Per line the preprocess costs
+  about what a classic pass does: on the two-hit scenes both run at 81-98 %
+  of Embree's raw all-hit rate (docs/performance.md, the limit benchmark).
+  So a first run's speed-up at equal error is roughly one over the square
+  of the error ratio at equal lines, less what it costs beyond a classic
+  solve of the same lines.
+
+  BIG ROOM's table shows why that ratio stays at 0.70-0.77:
+  - 58 % of classic's squared error is inside the ceiling lamp's shade, and
+    the lamp's box (10 % of the lines) cuts it to 0.12 of classic's.
+  - The other 42 % is in the walls, the floor and the furniture groups.
+    Only the root's lines (90 %) carry it, and there the hierarchical error
+    equals classic's.
+  - With no error left in the lamp at all, the squared error would still be
+    0.42 of classic's. That bounds the first run near 2.4x before the
+    preprocess's own costs, against the 2.5x target.
+  - What is left is a cheaper line: the preprocess would have to trace,
+    count, encode and compress a line for clearly less than a classic pass
+    traces and transports one.
+- **office2's first run:** 1.55x here, against the 1.5x target. It was
+  1.45x, 1.47x and 1.60x in the three evaluations before, at code whose
+  errors were the same, so it sits on the target. In CPU seconds it is
+  1.61x here (1.56x in the run before).
+  - Half of classic's squared error is in the room's walls, ceiling and
+    desks (the root), and a quarter more in two wall slabs that get few or no
+    lines of their own. The hierarchical runs err there as classic does.
+  - The fluorescent strip's box takes the other quarter down to 0.25 of
+    classic's.
+  - The error ratio at equal lines is 0.91-0.98, so the speed-up is
+    classic's cost beyond its first pass (its later passes: 40 % more lines
+    at 4M) plus its fixed costs. It is 2.11x at the smallest budget and
+    1.18x at the largest.
+- **Kept-store solves.** A kept-store solve reads its first shot from the
+  store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is
+  the transport loop over the stored lines and little else. soda's
+  kept-store solve, at 4.61x here (5.14x in the run before, with the same
+  errors), is the shortest of all: these times include each program's
+  start-up, about 0.03 s with the exec that asks for huge pages, and at
+  1M lines that is a sixth of a short solve.
 """
 
 
