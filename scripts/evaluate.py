@@ -741,7 +741,7 @@ def box_note(rows, seeds):
            " classic's in that box (over all boxes: %.2f, the square of the error ratio at equal lines):" % (
                "{:,}".format(rows[0]["lines"]), ", ".join(str(s) for s in seeds), rows[0]["total_ratio"]),
            "",
-           "| box | depth | objects | faces | area | hier. lines | classic's squared error | hier.'s squared error |"
+           "| box | depth | objects | faces | area (scene units²) | hier. lines | classic's squared error | hier.'s squared error |"
            " hier. / classic there |",
            "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
