@@ -66,10 +66,7 @@ ChunkTracer::ChunkTracer(const Options& options, const PatchMesh& mesh, const Hi
       owner_.push_back({hierarchy.patch_box[static_cast<size_t>(p)],
                         static_cast<uint8_t>((faces[0] == kInvisibleSide ? 1 : 0) | (faces[1] == kInvisibleSide ? 2 : 0))});
     }
-    for (const SceneBox& b : hierarchy.boxes) {
-      box_depth_.push_back(b.depth);
-      box_parent_.push_back(b.parent);
-    }
+    tree_ = BoxTree(hierarchy);
   }
 }
 
@@ -92,10 +89,6 @@ void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore
   // both patches (off the line: the outside, the root's); a subscene's line
   // leaving it carries no pair. Counted on the side of patch i that faces
   // crossing i + dir, as the solver's face_towards picks it.
-  const auto depth = [&](int x) { return box_depth_[static_cast<size_t>(x)]; };
-  const auto common = [&](int x, int y) {
-    return x == y ? x : common_ancestor(x, y, depth, [&](int z) { return box_parent_[static_cast<size_t>(z)]; });
-  };
   // A line's crossings: the box holding each patch and whether the side
   // towards either end is an invisible back, read once from owner_.
   thread_local std::vector<Owner> on_line;
@@ -120,8 +113,8 @@ void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore
     for (const int dir : {+1, -1}) {
       // Without invisible backs on the line the next crossing seen is the next one.
       const int j = invisible ? next_seen(i, dir, n, seen_towards) : i + dir;
-      const int k = pair_class(on_line[static_cast<size_t>(i)].box,
-                               j < 0 || j >= n ? -1 : on_line[static_cast<size_t>(j)].box, box_index_ == 0, depth, common);
+      const int k = tree_.pair_class(on_line[static_cast<size_t>(i)].box,
+                                     j < 0 || j >= n ? -1 : on_line[static_cast<size_t>(j)].box, box_index_ == 0);
       if (k < 0) continue;
       const int side = (dir > 0) == events[i].along ? 0 : 1;
       uint32_t* c = &counts.class_crossings[(size_t{events[i].id} * 2 + side) * class_span_ + static_cast<size_t>(k)];

@@ -80,7 +80,7 @@ class ChunkTracer {
     uint8_t invisible;
   };
   std::vector<Owner> owner_;
-  std::vector<int> box_depth_, box_parent_;  // transparent boxes: the hierarchy's, by box
+  BoxTree tree_;  // transparent boxes: the hierarchy's depths and parents, flat
 };
 
 }  // namespace mpath

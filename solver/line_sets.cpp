@@ -25,9 +25,7 @@ namespace {
 // it (j off the line of a subscene: the pair's other end is outside the box).
 inline int pair_class(const LineSets& sets, const LineSetBox& lines, bool root, const Event* ev, int n, int i,
                       int j) {
-  return mpath::pair_class(
-      lines.owner[ev[i].id], j < 0 || j >= n ? -1 : lines.owner[ev[j].id], root, [&](int x) { return sets.depth[x]; },
-      [&](int x, int y) { return sets.common_box(x, y); });
+  return sets.tree.pair_class(lines.owner[ev[i].id], j < 0 || j >= n ? -1 : lines.owner[ev[j].id], root);
 }
 
 
@@ -111,10 +109,7 @@ bool face_shares(const SlotCounts& counts, uint32_t first, uint32_t end, double*
 LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh) {
   const Hierarchy& h = store.hierarchy();
   LineSets sets;
-  for (const SceneBox& b : h.boxes) {
-    sets.depth.push_back(b.depth);
-    sets.parent.push_back(b.parent);
-  }
+  sets.tree = BoxTree(h);
   const size_t faces = mesh.face_count();
   sets.face_slot.assign(faces + 1, 0);
   for (size_t f = 0; f < faces; ++f)

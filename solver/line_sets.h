@@ -42,7 +42,7 @@ struct SetShardPool;
 
 struct LineSets {
   std::vector<LineSetBox> boxes;
-  std::vector<int> depth, parent;   // per box
+  BoxTree tree;                     // the hierarchy's depths and parents, flat
   std::vector<uint32_t> face_slot;  // per mesh face: first slot (its own box's class), then up to the root
   std::vector<double> alpha;        // per slot: the share of the face's power in that class
   std::vector<int> uncarried;       // faces no line can carry: shot with local lines
@@ -50,10 +50,6 @@ struct LineSets {
   // Scratch of the passes, not data of the store: the shards' accumulators,
   // zero between passes, so that a pass neither allocates nor clears them.
   std::shared_ptr<SetShardPool> pool;
-  // The smallest box holding boxes a and b (from these flat arrays: the passes' hot loop asks).
-  int common_box(int a, int b) const {
-    return common_ancestor(a, b, [this](int x) { return depth[x]; }, [this](int x) { return parent[x]; });
-  }
 };
 
 // The classes, slots and shares, from the crossing counts of the store's

@@ -51,6 +51,28 @@ struct Hierarchy {
   int class_span(int box) const { return transparent ? max_depth() - boxes[box].depth + 1 : 0; }
 };
 
+// A hierarchy's tree as two flat arrays, for the loops that ask per crossing
+// for a box's depth and the smallest box holding two (the solver's line-set
+// passes, the preprocessor's class counts): SceneBox records are far larger.
+struct BoxTree {
+  std::vector<int> depth, parent;  // per box
+  BoxTree() = default;
+  explicit BoxTree(const Hierarchy& h) {
+    for (const SceneBox& b : h.boxes) {
+      depth.push_back(b.depth);
+      parent.push_back(b.parent);
+    }
+  }
+  int common_box(int a, int b) const {
+    return a == b ? a : common_ancestor(a, b, [this](int x) { return depth[x]; }, [this](int x) { return parent[x]; });
+  }
+  // pair_class above, for boxes of this tree.
+  int pair_class(int a, int b, bool root_line) const {
+    return mpath::pair_class(
+        a, b, root_line, [this](int x) { return depth[x]; }, [this](int x, int y) { return common_box(x, y); });
+  }
+};
+
 // Builds the hierarchy of `mesh` (VP grids from vp_area_ratio or vp_grid); `flat` (or hierarchy.max_depth = 0): the
 // root alone. Deterministic for a given mesh and options. Candidate pairs and
 // intruding items are found in a spatial grid of the items; `all_pairs`
