@@ -90,7 +90,7 @@ uint64_t tracer_pass(const Tracer& tracer, const PatchMesh& mesh, uint64_t lines
   return over_lines(mesh, lines, seed, pass, shards, sequence, [&] {
     return [&tracer, &mesh, found = std::vector<LineHit>()](const GlobalLine& line) mutable -> uint64_t {
       tracer.all_hits(line.org, line.dir, line.length, found);
-      order_ties(mesh, tracer.tie_epsilon(), found);
+      order_ties(mesh, tracer.tie_epsilon(), found, tracer.live_faces());
       return found.size();
     };
   });

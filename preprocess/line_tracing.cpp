@@ -156,6 +156,11 @@ void ChunkTracer::trace(uint64_t chunk, TracedChunk& out, BoxTally& tally) const
   thread_local std::vector<uint64_t> met;
   met.clear();
   std::vector<Event>& events = traced.events;
+  // Per crossing this reads the box's crossing counts and, with line sets,
+  // its patches' owners, at the patch's place: fetched as Embree meets it.
+  HitPrefetch per_crossing;
+  per_crossing.add(counts.patch_crossings);
+  if (class_span_ > 0) per_crossing.add(owner_);
   for (uint64_t i = 0; i < n; ++i) {
     double u[4];
     sequence_.point(first + i, rng, u);
@@ -173,8 +178,8 @@ void ChunkTracer::trace(uint64_t chunk, TracedChunk& out, BoxTally& tally) const
     traced.entry_ar.push_back(entry_ar);
     traced.exit_ar.push_back(exit_ar);
     if (!crosses) continue;
-    tracer_.all_hits(line.org, line.dir, line.length, hits);
-    order_ties(mesh_, tracer_.tie_epsilon(), hits);
+    tracer_.all_hits(line.org, line.dir, line.length, hits, &per_crossing);
+    order_ties(mesh_, tracer_.tie_epsilon(), hits, tracer_.live_faces());
     children.clear();
     for (size_t k = 0; k < child_count; ++k) {
       const SceneBox& child = hierarchy_.boxes[box_.children[k]];

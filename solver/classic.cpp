@@ -60,7 +60,7 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
       points.point(i, rng, u);
       const GlobalLine line = sampler.sample(u);
       tracer.all_hits(line.org, line.dir, line.length, hits);
-      order_ties(mesh, tracer.tie_epsilon(), hits);
+      order_ties(mesh, tracer.tie_epsilon(), hits, tracer.live_faces());
       transport_line(in, hits, a);
       if (++since_report == 4096) {
         progress.advance(since_report);

@@ -78,7 +78,8 @@ TEST(OrderTies, KeepsLiveFacesInsideWhenALineOnlyCrossesTwoContacts) {
 // groups of one to five crossings at equal distance: order_ties must keep
 // each group's crossings in its place, reach the least number of live/black
 // pairs that any order of the groups reaches (found by trying every one),
-// and give the same order whatever order the crossings were reported in.
+// and give the same order whatever order the crossings were reported in, and
+// whether the faces' liveness comes from the mesh or a tracer's table.
 TEST(OrderTies, FindsTheLeastLiveBlackPairsOnRandomLines) {
   Rng rng = make_rng(20261204, 0, 0);
   PatchMesh mesh;
@@ -86,6 +87,16 @@ TEST(OrderTies, FindsTheLeastLiveBlackPairsOnRandomLines) {
     const double u = uniform(rng);
     const int back = u < 0.4 ? 2 * p + 1 : u < 0.8 ? kBlackSide : kInvisibleSide;
     mesh.patch_faces.push_back({2 * p, back});
+  }
+  // The same faces as a tracer's table of live faces (Tracer::live_faces),
+  // over every patch and over a subset numbered in another order.
+  std::vector<uint8_t> live_by_patch, live_by_traced(40);
+  std::vector<int> traced_of(40);
+  for (int p = 0; p < 40; ++p) traced_of[static_cast<size_t>(p)] = (7 * p + 3) % 40;
+  for (int p = 0; p < 40; ++p) {
+    const auto& f = mesh.patch_faces[static_cast<size_t>(p)];
+    live_by_patch.push_back(static_cast<uint8_t>((f[0] >= 0 ? 1 : 0) | (f[1] >= 0 ? 2 : 0)));
+    live_by_traced[static_cast<size_t>(traced_of[static_cast<size_t>(p)])] = live_by_patch.back();
   }
   const auto live_forward = [&](const LineHit& h) { return facing(mesh, h).forward >= 0; };
   const auto live_backward = [&](const LineHit& h) { return facing(mesh, h).backward >= 0; };
@@ -147,6 +158,17 @@ TEST(OrderTies, FindsTheLeastLiveBlackPairsOnRandomLines) {
       std::sort(a.begin(), a.end());
       std::sort(b.begin(), b.end());
       ASSERT_EQ(a, b) << "line " << line;
+    }
+    // From a tracer's table, the same order.
+    std::vector<LineHit> from_table = hits, from_subset = hits;
+    order_ties(mesh, 1e-9, from_table, live_by_patch.data());
+    for (LineHit& h : from_subset) h.traced = traced_of[static_cast<size_t>(h.patch)];
+    order_ties(mesh, 1e-9, from_subset, live_by_traced.data());
+    for (size_t k = 0; k < hits.size(); ++k) {
+      ASSERT_EQ(from_table[k].patch, ordered[k].patch) << "line " << line;
+      ASSERT_EQ(from_table[k].along, ordered[k].along) << "line " << line;
+      ASSERT_EQ(from_subset[k].patch, ordered[k].patch) << "line " << line;
+      ASSERT_EQ(from_subset[k].along, ordered[k].along) << "line " << line;
     }
     std::vector<LineHit> shuffled = hits;
     for (auto [lo, n] : groups)

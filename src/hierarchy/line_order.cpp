@@ -16,30 +16,51 @@ struct GroupOrder {
 
 constexpr size_t kMaxTieGroup = 5;
 
+// Whether a crossing's faces are live, looked up once per crossing: bit 0 the
+// face towards the line end, bit 1 the one towards its start.
+constexpr uint8_t kForwardLive = 1, kBackwardLive = 2;
+
+uint8_t live_sides(const PatchMesh& mesh, const uint8_t* live_faces, const LineHit& h) {
+  if (live_faces) {
+    const uint8_t faces = live_faces[h.traced >= 0 ? h.traced : h.patch];  // bit s: face s
+    // Along the line face 0 turns towards its end, against it face 1.
+    return h.along ? faces : static_cast<uint8_t>(((faces & 1) << 1) | (faces >> 1));
+  }
+  const Facing f = facing(mesh, h);
+  return static_cast<uint8_t>((f.forward >= 0 ? kForwardLive : 0) | (f.backward >= 0 ? kBackwardLive : 0));
+}
+
 // Appends the orders of the group of n crossings from lo to `out`.
-void group_orders(const PatchMesh& mesh, const std::vector<LineHit>& hits, size_t lo, size_t n,
+void group_orders(const std::vector<LineHit>& hits, const uint8_t* live, size_t lo, size_t n,
                   std::vector<GroupOrder>& out) {
+  // Each order is written in its place in `out`: one built aside and copied
+  // in was read back as whole words just after its bytes were stored, which
+  // the core cannot forward (a stall of some 20 cycles per group).
+  if (n == 1) {
+    GroupOrder& g = out.emplace_back();
+    g.first_back_live = live[lo] & kBackwardLive;
+    g.last_forward_live = live[lo] & kForwardLive;
+    return;
+  }
   std::array<uint8_t, 5> perm{};
   for (size_t k = 0; k < n; ++k) perm[k] = static_cast<uint8_t>(k);
   // Start from the order of patch indices so that ties between equal costs
   // resolve the same way whatever order Embree reported the hits in.
-  std::sort(perm.begin(), perm.begin() + n, [&](uint8_t a, uint8_t b) { return hits[lo + a].patch < hits[lo + b].patch; });
+  const auto by_patch = [&](uint8_t a, uint8_t b) { return hits[lo + a].patch < hits[lo + b].patch; };
+  std::sort(perm.begin(), perm.begin() + n, by_patch);
   do {
-    GroupOrder g;
+    GroupOrder& g = out.emplace_back();
     g.perm = perm;
-    g.first_back_live = facing(mesh, hits[lo + perm[0]]).backward >= 0;
-    g.last_forward_live = facing(mesh, hits[lo + perm[n - 1]]).forward >= 0;
+    g.first_back_live = live[lo + perm[0]] & kBackwardLive;
+    g.last_forward_live = live[lo + perm[n - 1]] & kForwardLive;
     for (size_t k = 0; k + 1 < n; ++k)
-      g.inner += (facing(mesh, hits[lo + perm[k]]).forward >= 0) != (facing(mesh, hits[lo + perm[k + 1]]).backward >= 0);
-    out.push_back(g);
-  } while (n > 1 && std::next_permutation(perm.begin(), perm.begin() + n, [&](uint8_t a, uint8_t b) {
-    return hits[lo + a].patch < hits[lo + b].patch;
-  }));
+      g.inner += static_cast<bool>(live[lo + perm[k]] & kForwardLive) != static_cast<bool>(live[lo + perm[k + 1]] & kBackwardLive);
+  } while (std::next_permutation(perm.begin(), perm.begin() + n, by_patch));
 }
 
 }  // namespace
 
-void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hits) {
+void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hits, const uint8_t* live_faces) {
   // Groups of crossings within epsilon of the group's first one.
   thread_local std::vector<std::pair<size_t, size_t>> groups;  // (start, size)
   groups.clear();
@@ -52,6 +73,10 @@ void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hit
     i = j;
   }
   if (!any_tie) return;
+  // Every crossing's faces once: the costs below look at each many times.
+  thread_local std::vector<uint8_t> live;
+  live.resize(hits.size());
+  for (size_t i = 0; i < hits.size(); ++i) live[i] = live_sides(mesh, live_faces, hits[i]);
 
   // Dynamic programme over the groups; the state is whether the face that the
   // last crossing so far turns towards the line end is live. Beyond both ends
@@ -74,12 +99,12 @@ void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hit
     const auto [lo, n] = groups[g];
     const size_t first = orders.size();
     if (n <= kMaxTieGroup) {
-      group_orders(mesh, hits, lo, n, orders);
+      group_orders(hits, live.data(), lo, n, orders);
     } else {  // too many to permute: keep the reported order
       GroupOrder keep;
       for (size_t k = 0; k < kMaxTieGroup; ++k) keep.perm[k] = static_cast<uint8_t>(k);
-      keep.first_back_live = facing(mesh, hits[lo]).backward >= 0;
-      keep.last_forward_live = facing(mesh, hits[lo + n - 1]).forward >= 0;
+      keep.first_back_live = live[lo] & kBackwardLive;
+      keep.last_forward_live = live[lo + n - 1] & kForwardLive;
       orders.push_back(keep);
     }
     for (size_t o = first; o < orders.size(); ++o) {

@@ -15,6 +15,24 @@
 
 namespace mpath {
 
+// Arrays indexed by traced patch (the tracer's own numbering, LineHit::traced
+// or, over every patch, the mesh's) whose entries a caller reads for every
+// crossing of a line: all_hits brings each crossing's entry towards the core
+// while Embree goes on along the line, instead of the caller waiting for it.
+struct HitPrefetch {
+  static constexpr int kMax = 3;
+  const char* base[kMax] = {};
+  size_t stride[kMax] = {};
+  int count = 0;
+  template <typename T>
+  void add(const std::vector<T>& array) {
+    if (count < kMax && !array.empty()) {
+      base[count] = reinterpret_cast<const char*>(array.data());
+      stride[count++] = sizeof(T);
+    }
+  }
+};
+
 struct NearestHit {
   int patch = -1;  // -1: the ray left the scene
   double t = 0;
@@ -41,8 +59,11 @@ class Tracer {
 
   // Every patch crossed by org + t dir, t in [0, tfar], sorted by distance,
   // with crossings repeated on shared edges of coplanar patches removed.
-  // `scratch` is reused between calls to avoid allocation.
-  void all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector<LineHit>& out) const;
+  // `out` is reused between calls to avoid allocation. The crossings'
+  // entries of `prefetch` (if given) are brought towards the core as they are
+  // met; the patches' planes and face records always are.
+  void all_hits(const Vec3& org, const Vec3& dir, double tfar, std::vector<LineHit>& out,
+                const HitPrefetch* prefetch = nullptr) const;
 
 
   static std::string embree_version();
@@ -53,6 +74,11 @@ class Tracer {
 
   // The Embree scene, for benchmarks that measure Embree alone.
   RTCScene embree_scene() const { return scene_; }
+  // Per traced patch (LineHit::traced over a subset, LineHit::patch over
+  // every patch): bit s is set when the patch's face s is live (neither a
+  // black nor an invisible side). One byte a patch, where the mesh's face
+  // records take eight: read for every crossing, it stays in the caches.
+  const uint8_t* live_faces() const { return live_.data(); }
   // Mesh patch of traced patch `local`.
   int global(int local) const { return all_ ? local : static_cast<int>(subset_[local]); }
 
@@ -62,6 +88,8 @@ class Tracer {
     double d;  // n . x = d on the plane
   };
   Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset, bool all);
+  // all_hits' intersection filter: records the hit and lets Embree go on.
+  static void collect_filter(const RTCFilterFunctionNArguments* args);
   void add_quads(size_t traced);
   // Distance along the ray to the plane of traced patch `local`, in double precision.
   double plane_distance(int local, const Vec3& org, const Vec3& dir, double fallback) const;
@@ -70,6 +98,7 @@ class Tracer {
   bool all_ = true;               // every patch of the mesh is traced
   std::vector<uint32_t> subset_;  // otherwise: traced patch -> mesh patch
   std::vector<Plane> planes_;     // per traced patch
+  std::vector<uint8_t> live_;     // per traced patch: live_faces()
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
   double tie_epsilon_ = 0;
