@@ -27,28 +27,28 @@ int64_t unzigzag(uint64_t v) { return static_cast<int64_t>(v >> 1) ^ -static_cas
 // 1), varint(exit + 1).
 void ChunkEncoder::add(uint32_t entry_ar, uint32_t exit_ar, const Event* events, size_t count) {
   const bool has_ars = entry_ar != kNoAr || exit_ar != kNoAr;
-  put_varint(lines_, (static_cast<uint64_t>(count) << 1) | (has_ars ? 1 : 0));
+  lines_.put((static_cast<uint64_t>(count) << 1) | (has_ars ? 1 : 0));
   if (has_ars) {
-    put_varint(lines_, ar_code(entry_ar));
-    put_varint(lines_, ar_code(exit_ar));
+    lines_.put(ar_code(entry_ar));
+    lines_.put(ar_code(exit_ar));
   }
   for (size_t k = 0; k < count; ++k) {
     const Event& e = events[k];
     const uint64_t code = event_code(e);
     if (k == 0) {
       const uint64_t delta = zigzag(static_cast<int64_t>(code) - static_cast<int64_t>(previous_first_));
-      put_varint(events_, delta);
-      put_varint(steps_, delta);
+      events_.put(delta);
+      steps_.put(delta);
       previous_first_ = code;
     } else {
-      put_varint(events_, code);
+      events_.put(code);
       const int64_t step = static_cast<int64_t>(e.id) - static_cast<int64_t>(events[k - 1].id);
-      put_varint(steps_, (zigzag(step) << 2) | (code & 3));
+      steps_.put((zigzag(step) << 2) | (code & 3));
     }
     if (e.kind == Event::child_box) {
-      for (std::string* s : {&events_, &steps_}) {
-        put_varint(*s, ar_code(e.entry_ar));
-        put_varint(*s, ar_code(e.exit_ar));
+      for (VarintStream* s : {&events_, &steps_}) {
+        s->put(ar_code(e.entry_ar));
+        s->put(ar_code(e.exit_ar));
       }
     }
   }
@@ -62,12 +62,13 @@ std::string ChunkEncoder::finish() {
   // where patch numbers follow no such order (office2's) plain ids compress
   // better. A fast zstd level (-1) on a sample of each stream tells which
   // (on the whole streams it cost 3-4 % of OFFICE's preprocess).
-  const bool steps = events_ != steps_ && zstd_sampled_size(steps_, -1) < zstd_sampled_size(events_, -1);
-  const std::string& events = steps ? steps_ : events_;
+  const std::string_view plain = events_.view(), stepped = steps_.view();
+  const bool steps = plain != stepped && zstd_sampled_size(stepped, -1) < zstd_sampled_size(plain, -1);
+  const std::string_view events = steps ? stepped : plain;
   std::string out;
   out.reserve(10 + lines_.size() + events.size());
   put_varint(out, (static_cast<uint64_t>(lines_.size()) << 1) | (steps ? 1 : 0));
-  out += lines_;
+  out += lines_.view();
   out += events;
   return out;
 }

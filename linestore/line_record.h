@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "varint.h"
+
 namespace mpath::linestore {
 
 inline constexpr uint32_t kNoAr = 0xFFFFFFFFu;
@@ -55,9 +57,9 @@ class ChunkEncoder {
   std::string finish();
 
  private:
-  std::string lines_;
-  std::string events_;  // later events' ids plain
-  std::string steps_;   // later events' ids as steps from the id before
+  VarintStream lines_;
+  VarintStream events_;  // later events' ids plain
+  VarintStream steps_;   // later events' ids as steps from the id before
   uint64_t previous_first_ = 0;
   uint64_t event_count_ = 0;
 };

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 namespace mpath::linestore {
 
@@ -17,6 +18,34 @@ inline void put_varint(std::string& out, uint64_t v) {
   buf[n++] = static_cast<char>(v);
   out.append(buf, n);
 }
+
+// A byte stream written a varint at a time, for the hot loops that write
+// millions (a chunk's encoder): room for the longest varint is made before
+// each write, which is then a few plain stores, where std::string::append
+// checks, copies and terminates every time.
+class VarintStream {
+ public:
+  void reserve(size_t bytes) {
+    if (buf_.size() < bytes + kMaxVarint) buf_.resize(bytes + kMaxVarint);
+  }
+  void put(uint64_t v) {
+    if (buf_.size() - size_ < kMaxVarint) buf_.resize(2 * buf_.size() + 64);
+    char* p = buf_.data() + size_;
+    while (v >= 0x80) {
+      *p++ = static_cast<char>((v & 0x7F) | 0x80);
+      v >>= 7;
+    }
+    *p++ = static_cast<char>(v);
+    size_ = static_cast<size_t>(p - buf_.data());
+  }
+  std::string_view view() const { return {buf_.data(), size_}; }
+  size_t size() const { return size_; }
+
+ private:
+  static constexpr size_t kMaxVarint = 10;
+  std::string buf_;  // written up to size_; the rest is room
+  size_t size_ = 0;
+};
 
 // Reads one varint at `pos`; false when the buffer ends inside it or it is
 // longer than 10 bytes.
