@@ -50,7 +50,8 @@ fs::path partial_path(const fs::path& path) {
 
 std::string encode_lines(const DecodedChunk& lines, const uint32_t* order, uint64_t& events) {
   const size_t n = lines.lines();
-  ChunkEncoder encoder(n);
+  thread_local ChunkEncoder encoder;  // keeps its memory from chunk to chunk
+  encoder.reset(n);
   // The lines are taken in `order`, at random in a chunk of megabytes: their
   // events are announced a few lines ahead, or the encoder waits on memory.
   constexpr size_t kAhead = 8;

@@ -44,10 +44,19 @@ struct LineRecord {
 class ChunkEncoder {
  public:
   // `lines`: how many lines will be added (to size the streams once).
-  explicit ChunkEncoder(size_t lines = 0) {
+  explicit ChunkEncoder(size_t lines = 0) { reset(lines); }
+  // Empty again, for a chunk of `lines` lines, keeping the streams' memory:
+  // an encoder kept from chunk to chunk neither allocates nor touches fresh
+  // pages.
+  void reset(size_t lines) {
+    lines_.clear();
+    events_.clear();
+    steps_.clear();
     lines_.reserve(lines * 2);
     events_.reserve(lines * 8);
     steps_.reserve(lines * 8);
+    previous_first_ = 0;
+    event_count_ = 0;
   }
   void add(const LineRecord& line) { add(line.entry_ar, line.exit_ar, line.events.data(), line.events.size()); }
   void add(uint32_t entry_ar, uint32_t exit_ar, const Event* events, size_t count);

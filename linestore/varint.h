@@ -38,6 +38,7 @@ class VarintStream {
     *p++ = static_cast<char>(v);
     size_ = static_cast<size_t>(p - buf_.data());
   }
+  void clear() { size_ = 0; }
   std::string_view view() const { return {buf_.data(), size_}; }
   size_t size() const { return size_; }
 
