@@ -903,7 +903,7 @@ from this run's CSVs; what follows explains them, from the profiles in
 - **Where a target is not met: BIG ROOM's first run.** A first run spends
   about four fifths of its time preprocessing, the first shot it traces
   for the store included (the table above). Per line the preprocess costs
-  about what a classic pass does: on the two-hit scenes both run at 81-98 %
+  about what a classic pass does: on the two-hit scenes both run at 81-97 %
   of Embree's raw all-hit rate (docs/performance.md, the limit benchmark).
   So a first run's speed-up at equal error is roughly one over the square
   of the error ratio at equal lines, less what it costs beyond a classic
@@ -921,10 +921,10 @@ from this run's CSVs; what follows explains them, from the profiles in
   - What is left is a cheaper line: the preprocess would have to trace,
     count, encode and compress a line for clearly less than a classic pass
     traces and transports one.
-- **office2's first run:** 1.55x here, against the 1.5x target. It was
-  1.45x, 1.47x and 1.60x in the three evaluations before, at code whose
-  errors were the same, so it sits on the target. In CPU seconds it is
-  1.61x here (1.56x in the run before).
+- **office2's first run:** 1.52x here, against the 1.5x target. It was
+  1.45x, 1.47x, 1.60x and 1.55x in the four evaluations before, at code
+  whose errors were the same, so it sits on the target. In CPU seconds it
+  is 1.61x here, as in the run before.
   - Half of classic's squared error is in the room's walls, ceiling and
     desks (the root), and a quarter more in two wall slabs that get few or no
     lines of their own. The hierarchical runs err there as classic does.
@@ -932,13 +932,14 @@ from this run's CSVs; what follows explains them, from the profiles in
     classic's.
   - The error ratio at equal lines is 0.91-0.98, so the speed-up is
     classic's cost beyond its first pass (its later passes: 40 % more lines
-    at 4M) plus its fixed costs. It is 2.11x at the smallest budget and
-    1.18x at the largest.
+    at 4M) plus its fixed costs. It is 1.75x at the smallest budget and
+    0.97x at the largest (2.11x and 1.18x in the run before: at one budget
+    the host's noise moves it by a fifth).
 - **Kept-store solves.** A kept-store solve reads its first shot from the
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is
   the transport loop over the stored lines and little else. soda's
-  kept-store solve, at 4.61x here (5.14x in the run before, with the same
-  errors), is the shortest of all: these times include each program's
+  kept-store solve, at 4.14x here (4.61x and 5.14x in the two runs before,
+  with the same errors), is the shortest of all: these times include each program's
   start-up, about 0.03 s with the exec that asks for huge pages, and at
   1M lines that is a sixth of a short solve.
 """
