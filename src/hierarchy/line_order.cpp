@@ -21,13 +21,9 @@ constexpr size_t kMaxTieGroup = 5;
 constexpr uint8_t kForwardLive = 1, kBackwardLive = 2;
 
 uint8_t live_sides(const PatchMesh& mesh, const uint8_t* live_faces, const LineHit& h) {
-  if (live_faces) {
-    const uint8_t faces = live_faces[h.traced >= 0 ? h.traced : h.patch];  // bit s: face s
-    // Along the line face 0 turns towards its end, against it face 1.
-    return h.along ? faces : static_cast<uint8_t>(((faces & 1) << 1) | (faces >> 1));
-  }
-  const Facing f = facing(mesh, h);
-  return static_cast<uint8_t>((f.forward >= 0 ? kForwardLive : 0) | (f.backward >= 0 ? kBackwardLive : 0));
+  const uint8_t faces = live_faces ? live_faces[h.traced >= 0 ? h.traced : h.patch] : mesh.live_face_bits(h.patch);
+  // Along the line face 0 turns towards its end, against it face 1.
+  return h.along ? faces : static_cast<uint8_t>(((faces & 1) << 1) | (faces >> 1));
 }
 
 // Appends the orders of the group of n crossings from lo to `out`.

@@ -35,8 +35,9 @@ inline int next_seen(int i, int dir, int n, const Towards& towards) {
 // Reorders crossings at equal distance (within epsilon) so that, where some
 // order allows, a live face is never paired with a black back side (objects
 // resting on surfaces, back-to-back walls, objects in corners). Which faces
-// are live comes from `live_faces` where given (Tracer::live_faces: bit s of
-// entry h.traced, or h.patch over every patch, for face s), else from the mesh.
+// are live comes from `live_faces` where given (Tracer::live_faces: entry
+// h.traced, or h.patch over every patch), else from the mesh
+// (PatchMesh::live_face_bits).
 void order_ties(const PatchMesh& mesh, double epsilon, std::vector<LineHit>& hits,
                 const uint8_t* live_faces = nullptr);
 

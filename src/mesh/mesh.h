@@ -57,6 +57,12 @@ struct PatchMesh {
   // face there (negative: the black or invisible back of a one-sided patch).
   int side_met(int patch, const Vec3& dir) const { return dot(patches[patch].normal, dir) < 0 ? 0 : 1; }
   int face_met(int patch, const Vec3& dir) const { return patch_faces[patch][side_met(patch, dir)]; }
+  // Which faces of `patch` are live (neither a black nor an invisible side):
+  // bit s for face s.
+  uint8_t live_face_bits(int patch) const {
+    const auto& f = patch_faces[patch];
+    return static_cast<uint8_t>((f[0] >= 0 ? 1 : 0) | (f[1] >= 0 ? 2 : 0));
+  }
   // Whether crossings of patches `a` and `b` that are neighbours on a line
   // touch: both lie on one contact plane, so the faces they turn towards
   // each other are pressed together and exchange nothing.

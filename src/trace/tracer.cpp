@@ -122,9 +122,8 @@ Tracer::Tracer(const PatchMesh& mesh, const std::vector<uint32_t>& subset, bool 
   for (size_t i = 0; i < traced; ++i) {
     const Patch& p = mesh.patches[global(static_cast<int>(i))];
     planes_.push_back({p.normal, dot(p.normal, mesh.vertices[p.v[0]])});
-    const auto& faces = mesh.patch_faces[global(static_cast<int>(i))];
-    live_.push_back(static_cast<uint8_t>((faces[0] >= 0 ? 1 : 0) | (faces[1] >= 0 ? 2 : 0)));
-    any_invisible_ |= faces[1] == kInvisibleSide;
+    live_.push_back(mesh.live_face_bits(global(static_cast<int>(i))));
+    any_invisible_ |= mesh.patch_faces[global(static_cast<int>(i))][1] == kInvisibleSide;
   }
   device_ = rtcNewDevice("verbose=0");
   MPATH_CHECK(device_ != nullptr, "rtcNewDevice failed (error {})", static_cast<int>(rtcGetDeviceError(nullptr)));

@@ -75,9 +75,9 @@ class Tracer {
   // The Embree scene, for benchmarks that measure Embree alone.
   RTCScene embree_scene() const { return scene_; }
   // Per traced patch (LineHit::traced over a subset, LineHit::patch over
-  // every patch): bit s is set when the patch's face s is live (neither a
-  // black nor an invisible side). One byte a patch, where the mesh's face
-  // records take eight: read for every crossing, it stays in the caches.
+  // every patch): PatchMesh::live_face_bits. One byte a patch, where the
+  // mesh's face records take eight: read for every crossing, it stays in the
+  // caches.
   const uint8_t* live_faces() const { return live_.data(); }
   // Mesh patch of traced patch `local`.
   int global(int local) const { return all_ ? local : static_cast<int>(subset_[local]); }
