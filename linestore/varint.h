@@ -8,15 +8,19 @@
 
 namespace mpath::linestore {
 
-inline void put_varint(std::string& out, uint64_t v) {
-  char buf[10];
-  size_t n = 0;
+// Writes `v` at `p` (10 bytes at most); returns the end of what it wrote.
+inline char* write_varint(char* p, uint64_t v) {
   while (v >= 0x80) {
-    buf[n++] = static_cast<char>((v & 0x7F) | 0x80);
+    *p++ = static_cast<char>((v & 0x7F) | 0x80);
     v >>= 7;
   }
-  buf[n++] = static_cast<char>(v);
-  out.append(buf, n);
+  *p++ = static_cast<char>(v);
+  return p;
+}
+
+inline void put_varint(std::string& out, uint64_t v) {
+  char buf[10];
+  out.append(buf, static_cast<size_t>(write_varint(buf, v) - buf));
 }
 
 // A byte stream written a varint at a time, for the hot loops that write
@@ -30,13 +34,7 @@ class VarintStream {
   }
   void put(uint64_t v) {
     if (buf_.size() - size_ < kMaxVarint) buf_.resize(2 * buf_.size() + 64);
-    char* p = buf_.data() + size_;
-    while (v >= 0x80) {
-      *p++ = static_cast<char>((v & 0x7F) | 0x80);
-      v >>= 7;
-    }
-    *p++ = static_cast<char>(v);
-    size_ = static_cast<size_t>(p - buf_.data());
+    size_ = static_cast<size_t>(write_varint(buf_.data() + size_, v) - buf_.data());
   }
   void clear() { size_ = 0; }
   std::string_view view() const { return {buf_.data(), size_}; }
