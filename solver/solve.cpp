@@ -119,29 +119,34 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
     record.shot.lines += shot_lines;
     record.lights[l].first_shot_lines = shot_lines;
   }
-  checkpoint.save(state, record.iterations);
 }
 
 // Iterations of the stored-line methods or classic passes. A checkpoint
-// follows a pass that ends solver.checkpoint_seconds or more after the last
-// one was written (start_state wrote one just before), and the last pass.
-// Writing OFFICE's 8 MB state after each of 20 short passes took 0.13-0.17 s
-// of a 2 s solve, all of it serial (docs/performance.md, "Checkpoints").
+// follows the first shot or a pass that ends solver.checkpoint_seconds or
+// more after the solve began (`began`: before the first shot) or the last
+// checkpoint was written, and the last pass, so that an interrupted run
+// loses at most that long of finished work. Writing OFFICE's 8 MB state
+// after each of 20 short passes took 0.13-0.17 s of a 2 s solve, all of it
+// serial, and a short solve's first shot read from its store in 0.01 s was
+// followed by a write of the whole state (docs/performance.md, "Checkpoints").
 void run_iterations(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore* store,
-                    const Checkpoint& checkpoint, RadiosityState& state, SolveRecord& record) {
+                    const Checkpoint& checkpoint, clock::time_point began, RadiosityState& state,
+                    SolveRecord& record) {
   const auto start = clock::now();
   record.hits_before = record.iterations.hits;
   IterationLog& log = record.iterations;
-  auto written = clock::now();
-  size_t saved_passes = log.passes.size();
+  auto written = began;
+  bool saved = record.resumed;  // whether checkpoint.bin holds the state as it is now
   const auto write = [&] {
     checkpoint.save(state, log);
     written = clock::now();
-    saved_passes = log.passes.size();
+    saved = true;
   };
   const auto save = [&] {
+    saved = false;
     if (seconds_since(written) >= options.solver.checkpoint_seconds) write();
   };
+  if (!record.resumed) save();  // the first shot
   if (store) {
     iterate(options, state, log,
             [&](unsigned pass) {
@@ -154,7 +159,7 @@ void run_iterations(const Options& options, const PatchMesh& mesh, const TracerO
                           pass, options.solver.shards, options.lines.sequence);
     }, save);
   }
-  if (saved_passes != log.passes.size()) write();
+  if (!saved) write();
   record.timings.iterations = seconds_since(start);
 }
 
@@ -301,8 +306,9 @@ void solve_on_threads(const Options& options, const SolveFlags& flags, int threa
   spdlog::info("solving in {} channel(s); emitted power {:.6g} W", state.channels, state.emitted_total());
   const std::string geometry = store ? store->manifest().identity.at(kMeshHashKey) : mesh_hash(mesh);
   const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, geometry)};
+  const auto began = clock::now();
   start_state(options, flags, mesh, tracer, store.get(), checkpoint, lights, state, record);
-  run_iterations(options, mesh, tracer, store.get(), checkpoint, state, record);
+  run_iterations(options, mesh, tracer, store.get(), checkpoint, began, state, record);
   log_remaining(options, mesh, store.get(), state, record.iterations, record.warnings);
   if (!Ranks::root()) return;
   write_outputs(options, mesh, tracer, lights, state, record);

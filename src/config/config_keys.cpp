@@ -452,8 +452,8 @@ std::vector<ConfigKey> make_table() {
        "at once)",
        SET(o.solver.shards = static_cast<int>(positive_at_most(get_integer(n, s), 4096, s))), GET(o.solver.shards)},
       {"solver.checkpoint_seconds",
-       "checkpoint.bin is written after the first shot, after a pass that ends at least this many seconds after it "
-       "was last written, and after the last pass; 0: after every pass",
+       "checkpoint.bin is written after the first shot or a pass that ends at least this many seconds after the solve "
+       "began or it was last written, and after the last pass; 0: after the first shot and every pass",
        SET(o.solver.checkpoint_seconds = in_range(get_number(n, s), 0.0, 1e9, s)), GET(o.solver.checkpoint_seconds)},
       {"solver.adaptive_lines",
        "stored-line methods: later iterations take a share of each box's lines in proportion to the power it has left "
