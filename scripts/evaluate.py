@@ -6,6 +6,13 @@ and regenerates docs/results.md; this is the driver it calls.
     evaluate.py [--scenes room,bigroom,office,office2,office3,soda] [--seeds 1,2,3]
                 [--budgets 1e6,2e6] [--reference-lines 6.4e7] [--threads 0]
                 [--work build/evaluate] [--docs docs] [--images-budget N]
+                [--scene NAME=CONFIG.toml ...]
+
+--scene adds a scene of one's own (repeat it for more; name it in --scenes
+too, or give --scenes only those): its config as it is, lines 1M to 8M
+(classic to 16M), 64M-line references. Give such a run a --docs and --work
+of its own: its results.md then holds the tables and figures of those
+scenes alone, without the discussion of the shipped ones.
 
 For every scene, seed and line budget: mpath-solve with solver.method=classic,
 and mpath-preprocess + mpath-solve with solver.method=hierarchical (the store
@@ -59,6 +66,7 @@ SCENES = {
              "classic_extra": [1.6e7], "reference": 6.4e7, "seeds": 2,
              "needs": os.path.join(SHARED, "rpk_extra", "soda.mgf")},
 }
+SHIPPED = set(SCENES)
 # Speed-ups at equal error the project aims at: (first run, solve on a kept store).
 TARGETS = {"room": (1.5, 5.0), "bigroom": (2.5, 5.0), "office": (2.5, 5.0), "office2": (1.5, 5.0)}
 # The measured methods: a row's "method", and the settings it runs with.
@@ -71,6 +79,13 @@ METHODS = {"classic": ["solver.method=classic"], "hierarchical": ["solver.method
 REFERENCE_SEED = 977
 COMMON = ["output.png=false", "output.exr=false", "output.grids=false", "lines.total={lines}",
           "lines.seed={seed}", "store.dir={store}", "output.dir={out}"]
+
+
+def own_scene(name, config):
+    """The spec of a scene given with --scene: its own config, the ladder of
+    the shipped scenes of its size."""
+    return {"title": name, "config": config, "budgets": [1e6, 2e6, 4e6, 8e6], "classic_extra": [1.6e7],
+            "reference": 6.4e7}
 
 
 def log(msg):
@@ -648,7 +663,9 @@ def document(args, runs, speed, memory, bias, by_box, figures, meta):
     w("")
     w(time_shares(runs, meta["scenes"]))
     w("")
-    w(DISCUSSION)
+    # The discussion is of the shipped scenes; a page of one's own scenes has their tables alone.
+    if all(sc["name"] in SHIPPED for sc in meta["scenes"]):
+        w(DISCUSSION)
     return "\n".join(L) + "\n"
 
 
@@ -958,7 +975,18 @@ def main():
     ap.add_argument("--keep-stores", action="store_true")
     ap.add_argument("--all-seeds", action="store_true", help="every scene runs every seed")
     ap.add_argument("--report-only", action="store_true", help="redraw figures and results.md from the CSVs")
+    ap.add_argument("--scene", action="append", default=[], metavar="NAME=CONFIG",
+                    help="a scene of one's own, by its config (repeatable)")
     args = ap.parse_args()
+    for item in args.scene:
+        name, _, config = item.partition("=")
+        if name in SHIPPED:
+            sys.exit("evaluate: --scene %r: %s is a shipped scene's name; give yours another" % (item, name))
+        if not name or not config or not os.path.isfile(config):
+            sys.exit("evaluate: --scene %r: give NAME=CONFIG with an existing config file" % item)
+        SCENES[name] = own_scene(name, os.path.abspath(config))
+    if args.scene and "--scenes" not in sys.argv:
+        args.scenes = ",".join(item.partition("=")[0] for item in args.scene)
     args.seeds = [int(s) for s in args.seeds.split(",")]
     args.work = os.path.abspath(args.work)
     bench, figs = os.path.join(args.docs, "benchmarks"), os.path.join(args.docs, "figures")
@@ -980,7 +1008,8 @@ def main():
         # The error images again from the kept runs, where they are still there.
         images = {}
         for scene in meta["scenes"]:
-            sc = Scene(scene["name"], SCENES[scene["name"]], args)
+            spec = SCENES.get(scene["name"]) or own_scene(scene["name"], scene["config"])
+            sc = Scene(scene["name"], spec, args)
             images[scene["name"]] = error_images(sc, args, [r for r in runs if r["scene"] == scene["name"]])
     else:
         runs, bias, images, scenes, by_box = [], {}, {}, [], []
