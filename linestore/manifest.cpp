@@ -27,7 +27,8 @@ void write_manifest(const fs::path& path, const Manifest& m) {
   const json j = {{"format_version", m.format_version}, {"mpath_version", m.mpath_version},
                   {"identity", m.identity},             {"patches", m.patches},
                   {"faces", m.faces},                   {"lines_total", m.lines_total},
-                  {"chunk_lines", m.chunk_lines},       {"boxes", boxes},
+                  {"chunk_lines", m.chunk_lines},       {"first_shot_lines", m.first_shot_lines},
+                  {"boxes", boxes},
                   {"files", files}};
   AtomicFile file(path, partial_path(path));
   file.stream() << json_text(j);
@@ -67,6 +68,7 @@ Manifest read_manifest(const fs::path& path) {
     m.faces = count(j, "faces");
     m.lines_total = count(j, "lines_total");
     m.chunk_lines = count(j, "chunk_lines");
+    if (j.contains("first_shot_lines")) m.first_shot_lines = count(j, "first_shot_lines");
     for (const json& b : j.at("boxes")) {
       BoxEntry e;
       e.parent = small(b, "parent");

@@ -47,6 +47,9 @@ struct Manifest {
   uint64_t faces = 0;
   uint64_t lines_total = 0;
   uint64_t chunk_lines = 0;
+  // The first shot's local lines of first_shot.bin (the pilot's choice where
+  // first_shot.lines was 0); 0 in stores made before it was recorded.
+  uint64_t first_shot_lines = 0;
   std::vector<BoxEntry> boxes;
   std::vector<StoreFile> files;
 };

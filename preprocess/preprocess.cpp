@@ -70,6 +70,8 @@ linestore::Manifest base_manifest(const Options& options, const PatchMesh& mesh,
   m.lines_total = 0;
   for (uint64_t n : budget) m.lines_total += n;
   m.chunk_lines = static_cast<uint64_t>(options.store.chunk_lines);
+  // What first_shot.bin will hold, for the solves (with first_shot.accelerate they trace it).
+  m.first_shot_lines = options.first_shot.accelerate ? 0 : static_cast<uint64_t>(first_shot_lines(options));
   for (size_t b = 0; b < hierarchy.boxes.size(); ++b) {
     const SceneBox& box = hierarchy.boxes[b];
     linestore::BoxEntry e;
@@ -261,15 +263,28 @@ PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& s
   auto t = clock::now();
   const Hierarchy hierarchy = store_hierarchy(options, mesh, nullptr, &prepared.scene);
   stats.hierarchy_seconds = seconds(clock::now() - t);
+  // The pilot sets the boxes' lines (the pilot budget) and the first shot's
+  // (first_shot.lines = 0), which this run stores for the solves.
   std::vector<double> pilot;
-  if (options.lines.box_budget == "pilot" && hierarchy.boxes.size() > 1) {
+  const bool boxes_need_pilot = options.lines.box_budget == "pilot" && hierarchy.boxes.size() > 1;
+  const bool shot_needs_pilot = options.first_shot.lines == 0 && !options.first_shot.accelerate && !print_hierarchy &&
+                                !dry_run;
+  Options run = options;
+  if (boxes_need_pilot || shot_needs_pilot) {
     t = clock::now();
     const long long lines = options.lines.pilot_lines();
-    pilot = pilot_weights(prepared.scene, mesh, hierarchy, options.lines.seed, static_cast<uint64_t>(lines));
+    const Pilot p = run_pilot(prepared.scene, mesh, &hierarchy, options.lines.seed, static_cast<uint64_t>(lines));
+    if (boxes_need_pilot) pilot = p.box_weights;
     stats.pilot_seconds = seconds(clock::now() - t);
     stats.pilot_lines = static_cast<uint64_t>(lines);
     spdlog::info("pilot: {} local and {} global lines ({:.2f} s){}", lines, lines, stats.pilot_seconds,
-                 pilot.empty() ? ": nothing emits, the subscenes share by quotient" : "");
+                 p.empty() ? ": nothing emits" + std::string(boxes_need_pilot ? ", the subscenes share by quotient" : "")
+                           : "");
+    if (shot_needs_pilot) {
+      stats.first_shot_share = first_shot_share(p);
+      run.first_shot.chosen = first_shot_lines_for_share(options, stats.first_shot_share);
+      log_first_shot_choice(p, run.first_shot.chosen, options.lines.total);
+    }
   }
   const std::vector<uint64_t> budget = box_line_budget(hierarchy, options.lines, pilot);
   if (!pilot.empty())
@@ -297,14 +312,14 @@ PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& s
                        DirectoryLock::Role::writer, fmt::format("shard {}/{} of store.dir", shard.index, shard.count),
                        "that shard is being traced by another mpath-preprocess; run each shard once");
   const auto identity = store_identity(options, mesh);
-  const linestore::Manifest base = base_manifest(options, mesh, hierarchy, budget, identity);
+  const linestore::Manifest base = base_manifest(run, mesh, hierarchy, budget, identity);
   const fs::path record = shard.count == 1 ? dir / "manifest.json" : part_manifest(dir, shard);
   if (const auto finished = finished_and_verified(record, dir, identity)) {
     spdlog::info("{}: shard {}/{} finished and verified earlier, not traced again", dir.string(), shard.index, shard.count);
     note_other_hierarchy(*finished, dir, base);
     stats.skipped = true;
     if (shard.count > 1) stats.manifest_written = merge_parts(dir, shard, base);
-    if (shard.count == 1 || stats.manifest_written) add_first_shot(options, prepared, stats, nullptr);
+    if (shard.count == 1 || stats.manifest_written) add_first_shot(run, prepared, stats, nullptr);
     return stats;
   }
   // The store is incomplete from now until this run's manifest is written.
@@ -324,12 +339,12 @@ PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& s
   linestore::write_manifest(record, m);
   stats.manifest_written = shard.count == 1 || merge_parts(dir, shard, base);
   // A shard's lines are part of the store's: the last shard opens the store to count them all.
-  if (stats.manifest_written) add_first_shot(options, prepared, stats, shard.count == 1 ? &face_crossings : nullptr);
+  if (stats.manifest_written) add_first_shot(run, prepared, stats, shard.count == 1 ? &face_crossings : nullptr);
   stats.wall_seconds = seconds(clock::now() - start);
   const nlohmann::json timings = {{"shard", fmt::format("{}/{}", shard.index, shard.count)}, {"lines", stats.lines},
                                  {"events", stats.events}, {"bytes", stats.bytes}, {"raw_bytes", stats.raw_bytes},
                                  {"hierarchy_seconds", stats.hierarchy_seconds}, {"pilot_seconds", stats.pilot_seconds},
-                                 {"pilot_lines", stats.pilot_lines},
+                                 {"pilot_lines", stats.pilot_lines}, {"first_shot_share", stats.first_shot_share},
                                  {"first_shot_seconds", stats.first_shot_seconds},
                                  {"first_shot_lines", stats.first_shot_lines},
                                  {"first_shot_bytes", stats.first_shot_bytes},

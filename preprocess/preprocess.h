@@ -21,7 +21,8 @@ struct PreprocessStats {
   uint64_t lines = 0, events = 0, bytes = 0, raw_bytes = 0;
   double trace_seconds = 0, encode_seconds = 0, compress_seconds = 0, write_seconds = 0;  // summed over threads
   double wall_seconds = 0, hierarchy_seconds = 0, pilot_seconds = 0;
-  uint64_t pilot_lines = 0;  // local lines of the pilot budget, and as many global ones (0: no pilot ran)
+  uint64_t pilot_lines = 0;  // local lines of the pilot, and as many global ones (0: no pilot ran)
+  double first_shot_share = 0;  // first-shot lines per line of lines.total the pilot chose (0: none chosen)
   // The store's first shot (first_shot.bin), written when the store is complete.
   uint64_t first_shot_lines = 0, first_shot_bytes = 0;
   double first_shot_seconds = 0;

@@ -118,7 +118,9 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
       {"first_shot", {{"lines", r.shot.lines}, {"emitter_faces", r.shot.emitter_faces},
                       {"associated_hits", r.shot.associated_hits},
                       {"global_emitter_faces", r.shot.global_emitter_faces}, {"from_checkpoint", r.resumed},
-                      {"from_store", r.shot.stored}, {"traced_because", r.shot.traced_because}}},
+                      {"from_store", r.shot.stored}, {"traced_because", r.shot.traced_because},
+                      {"lines_from", r.shot_lines_from}, {"pilot_share", r.shot_share},
+                      {"pilot_seconds", r.pilot_seconds}}},
       {"lights", [&] {
          json lights = json::array();
          for (const SolveRecord::Light& l : r.lights)

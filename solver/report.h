@@ -29,6 +29,11 @@ struct SolveRecord {
   int ranks = 1;  // MPI ranks that shared the passes
   SolveTimings timings;
   FirstShotStats shot;
+  // How the first shot's lines were set when first_shot.lines is 0: "pilot"
+  // (this run's), "store" (the store's first shot), else "config".
+  std::string shot_lines_from = "config";
+  double shot_share = 0;      // the pilot's share of lines.total (0: no pilot ran)
+  double pilot_seconds = 0;
   bool resumed = false;
   IterationLog iterations;
   uint64_t hits_before = 0;      // hits of passes restored from a checkpoint (not timed by this run)

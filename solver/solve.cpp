@@ -13,6 +13,7 @@
 #include "directory_lock.h"
 #include "error.h"
 #include "first_shot.h"
+#include "pilot.h"
 #include "stored_shot.h"
 #include "store_identity.h"
 #include "json_text.h"
@@ -83,10 +84,31 @@ std::unique_ptr<BoxStore> open_store(const Options& options, const PatchMesh& me
   return store;
 }
 
+// The first shot's lines where first_shot.lines is 0: a kept store's (its
+// first_shot.bin, read instead of traced), else the pilot's choice
+// (pilot.h); a store made before stores recorded them, half of lines.total
+// as then.
+long long chosen_first_shot_lines(const Options& options, const Scene& scene, const PatchMesh& mesh,
+                                  const TracerOnDemand& tracer, const BoxStore* store, SolveRecord& record) {
+  if (store) {
+    record.shot_lines_from = "store";
+    return static_cast<long long>(store->manifest().first_shot_lines);
+  }
+  const auto start = clock::now();
+  const Pilot pilot = run_pilot(scene, mesh, nullptr, options.lines.seed,
+                                static_cast<uint64_t>(options.lines.pilot_lines()), &tracer.get());
+  record.shot_lines_from = "pilot";
+  record.shot_share = first_shot_share(pilot);
+  record.pilot_seconds = seconds_since(start);
+  const long long lines = first_shot_lines_for_share(options, record.shot_share);
+  log_first_shot_choice(pilot, lines, options.lines.total);
+  return lines;
+}
+
 // Restores the state from the checkpoint (--resume) or runs the first shot.
-void start_state(const Options& options, const SolveFlags& flags, const PatchMesh& mesh, const TracerOnDemand& tracer,
-                 const BoxStore* store, const Checkpoint& checkpoint, const std::vector<PointLight>& lights,
-                 RadiosityState& state, SolveRecord& record) {
+void start_state(const Options& run_options, const SolveFlags& flags, const Scene& scene, const PatchMesh& mesh,
+                 const TracerOnDemand& tracer, const BoxStore* store, const Checkpoint& checkpoint,
+                 const std::vector<PointLight>& lights, RadiosityState& state, SolveRecord& record) {
   if (flags.resume && std::filesystem::exists(checkpoint.path)) {
     read_checkpoint(checkpoint.path, checkpoint.key, state, record.iterations);
     record.resumed = true;
@@ -94,6 +116,9 @@ void start_state(const Options& options, const SolveFlags& flags, const PatchMes
     return;
   }
   if (flags.resume) spdlog::warn("--resume: no checkpoint at {}; starting from the beginning", checkpoint.path.string());
+  Options options = run_options;
+  if (options.first_shot.lines == 0)
+    options.first_shot.chosen = chosen_first_shot_lines(options, scene, mesh, tracer, store, record);
   const RunFirstShot shot = plan_run_first_shot(options, mesh, state, store, lights);
   std::unique_ptr<SubsceneNearest> accelerated;
   if (options.first_shot.accelerate && store && store->box_count() > 1 && !store->line_sets())
@@ -307,7 +332,7 @@ void solve_on_threads(const Options& options, const SolveFlags& flags, int threa
   const std::string geometry = store ? store->manifest().identity.at(kMeshHashKey) : mesh_hash(mesh);
   const Checkpoint checkpoint{options.output.dir / "checkpoint.bin", checkpoint_key(options, geometry)};
   const auto began = clock::now();
-  start_state(options, flags, mesh, tracer, store.get(), checkpoint, lights, state, record);
+  start_state(options, flags, prepared.scene, mesh, tracer, store.get(), checkpoint, lights, state, record);
   run_iterations(options, mesh, tracer, store.get(), checkpoint, began, state, record);
   log_remaining(options, mesh, store.get(), state, record.iterations, record.warnings);
   if (!Ranks::root()) return;

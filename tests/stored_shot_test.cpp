@@ -268,11 +268,19 @@ TEST(StoredShot, TheSolveReadsThePreprocessorsFirstShot) {
   ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common).exit_code, 0);
   ASSERT_TRUE(std::filesystem::exists(dir / "store" / kStoredShotFile));
   const auto stats = nlohmann::json::parse(test::read_file(dir / "store" / "preprocess.json"));
-  EXPECT_EQ(stats["first_shot_lines"].get<uint64_t>(), 75'000u) << "half of lines.total";
+  // first_shot.lines = 0: the pilot's share of lines.total, recorded in the manifest for the solves.
+  const double share = stats["first_shot_share"].get<double>();
+  EXPECT_GE(share, 0.125);
+  EXPECT_LE(share, 4.0);
+  const uint64_t lines = stats["first_shot_lines"].get<uint64_t>();
+  EXPECT_EQ(lines, static_cast<uint64_t>(std::llround(share * 150'000)));
+  EXPECT_EQ(nlohmann::json::parse(test::read_file(dir / "store" / "manifest.json"))["first_shot_lines"].get<uint64_t>(),
+            lines);
 
   const nlohmann::json read = solve("read", "");
   EXPECT_TRUE(read["first_shot"]["from_store"].get<bool>());
-  EXPECT_EQ(read["first_shot"]["lines"].get<uint64_t>(), 75'000u);
+  EXPECT_EQ(read["first_shot"]["lines"].get<uint64_t>(), lines);
+  EXPECT_EQ(read["first_shot"]["lines_from"].get<std::string>(), "store");
   EXPECT_LT(std::abs(read["energy"]["relative_residual"].get<double>()), 1e-9);
 
   const nlohmann::json other = solve("other", " first_shot.lines=60000");

@@ -1,6 +1,7 @@
 #include "config.h"
 
 #include <algorithm>
+#include <cmath>
 #include <toml++/toml.h>
 
 #include <functional>
@@ -136,7 +137,13 @@ std::string options_to_json(const Options& options) {
 
 long long first_shot_lines(const Options& options) {
   if (options.first_shot.lines > 0) return options.first_shot.lines;
+  if (options.first_shot.chosen > 0) return options.first_shot.chosen;
   return std::max<long long>(10'000, options.lines.total / 2);
+}
+
+long long first_shot_lines_for_share(const Options& options, double share) {
+  if (!(share > 0)) return std::max<long long>(10'000, options.lines.total / 2);
+  return std::max<long long>(10'000, std::llround(share * static_cast<double>(options.lines.total)));
 }
 
 int effective_threads(const Options& options) {

@@ -68,7 +68,10 @@ struct Options {
   Lines lines;
 
   struct FirstShot {
-    long long lines = 0;  // 0: half of lines.total (first_shot_lines)
+    long long lines = 0;  // 0: set by a pilot (first_shot_lines)
+    // Not a config key: the lines the programs chose from the pilot (or a
+    // store records) when `lines` is 0; 0 until then.
+    long long chosen = 0;
     bool accelerate = false;
     // "auto": an emitter face that the first pass of global lines crosses more
     // often than it would get local lines is shot by the global lines;
@@ -129,7 +132,11 @@ std::string options_to_json(const Options& options);
 // Local lines of the first shot: first_shot.lines, or when it is 0 half of
 // lines.total (at least 10,000), so that the first shot's noise falls with
 // the line budget (docs/algorithm.md, "First shot").
+// first_shot.lines; where it is 0, first_shot.chosen, else half of lines.total (at least 10,000).
 long long first_shot_lines(const Options& options);
+// The first-shot lines for a share of lines.total the pilot chose (at least
+// 10,000); half of lines.total where the pilot had none (nothing emits).
+long long first_shot_lines_for_share(const Options& options, double share);
 
 // Number of worker threads the options ask for.
 int effective_threads(const Options& options);

@@ -27,11 +27,11 @@ struct LineOptions {
   double root_fraction = 0.8;  // docs/algorithm.md (the paper: 2/3)
   // How the lines are shared: root_fraction in the root and the rest by the
   // subscenes' grouping "quotient" or "objects" count (paper 3.3.1), or
-  // "pilot" (preprocess/pilot.h, docs/algorithm.md, "Pilot budget").
+  // "pilot" (solver/pilot.h, docs/algorithm.md, "Pilot budget").
   // "pilot" is the default: at equal lines it errs less than the paper's rule
   // on every measured scene with subscenes (docs/algorithm.md).
   std::string box_budget = "pilot";
-  long long pilot = 0;  // local and global lines of the "pilot" budget (preprocess/pilot.h); 0: pilot_lines()'s default
+  long long pilot = 0;  // local and global lines of the "pilot" budget (solver/pilot.h); 0: pilot_lines()'s default
   // The pilot's lines: `pilot` where set, but never more than a quarter of
   // the run's; by default a twentieth of the run's, at least 50,000 and at
   // most 200,000 (or a quarter of the run's, if less). A smaller pilot set

@@ -13,7 +13,7 @@ namespace mpath {
 // quotient (or object count), each box at least 4 lines per AR of its walls
 // so that its transmittances are sampled. With no subscenes the root gets all.
 // With lines.box_budget = "pilot" and `pilot` (per box, the sum of the
-// squared reflected radiosities of its faces; preprocess/pilot.h), the root
+// squared reflected radiosities of its faces; solver/pilot.h), the root
 // fraction and the subscenes' shares are chosen to make the pilot's error
 // model least instead (docs/algorithm.md, "Pilot budget").
 std::vector<uint64_t> box_line_budget(const Hierarchy& h, const LineOptions& lines,
