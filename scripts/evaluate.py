@@ -884,10 +884,23 @@ from this run's CSVs; what follows explains them, from the profiles in
   equal lines, more so the more lines. soda is one large shop lit by
   spherical lamps hanging in the open: its error is in the ceiling and the
   floor (six tenths of the squared error), which only the root's lines
-  carry (97 % of them), and the hierarchy errs 1.01-1.02 times classic at
+  carry (97 % of them), and the hierarchy errs 1.01-1.04 times classic at
   equal lines; its first run is faster all the same, since classic casts
   more lines than the store holds (its later passes), and its error falls
-  with lines on both sides (12 % at 1M to about 4.4 % at 8M).
+  with lines on both sides (8.3 % at 1M to 3.0 % at 8M).
+- **The first shot's share** (since d650bc8). A pilot now sets the first
+  shot's lines (docs/algorithm.md, "First-shot share"): 1.8-1.9 times
+  `lines.total` on soda, whose many small lamps make most of what is seen
+  directly lit, about 1.0-1.3 on office3, 0.3-0.7 on the others (half
+  before). Both methods shoot the same first shot. soda's errors fell by
+  about a third at every budget on both sides (hierarchical 11.9 -> 8.3 %
+  at 1M, 4.3 -> 3.0 % at 8M; classic 11.7 -> 8.0 %, 4.3 -> 3.0 %), and
+  office3's by 5-17 %; a kept-store solve reads its first shot from the
+  store whatever its size, while classic traces it on every solve, so the
+  kept-store speed-ups rose most there (soda 4.1x -> 5.2x). On BIG ROOM
+  the pilot gives the first shot a third of `lines.total` instead of a
+  half: its errors at equal lines rose by up to 7 %, for shorter runs on
+  both sides.
 - **Where the error lies.** The table under each scene splits each
   method's squared error by box. Wherever the hierarchy gives a small
   bright box lines of its own (a lamp in its shade: ROOM's, BIG ROOM's,
@@ -926,39 +939,50 @@ from this run's CSVs; what follows explains them, from the profiles in
   of the error ratio at equal lines, less what it costs beyond a classic
   solve of the same lines.
 
-  BIG ROOM's table shows why that ratio stays at 0.70-0.77:
-  - 58 % of classic's squared error is inside the ceiling lamp's shade, and
-    the lamp's box (10 % of the lines) cuts it to 0.12 of classic's.
-  - The other 42 % is in the walls, the floor and the furniture groups.
+  BIG ROOM's table shows why that ratio stays at 0.71-0.78:
+  - 61 % of classic's squared error is inside the ceiling lamp's shade, and
+    the lamp's box (10 % of the lines) cuts it to 0.22 of classic's (0.12
+    in the run before, whose first shot had half of `lines.total`, not a
+    third).
+  - The other 39 % is in the walls, the floor and the furniture groups.
     Only the root's lines (90 %) carry it, and there the hierarchical error
-    equals classic's.
+    equals classic's (1.00-1.10 of it box by box).
   - With no error left in the lamp at all, the squared error would still be
-    0.42 of classic's. That bounds the first run near 2.4x before the
-    preprocess's own costs, against the 2.5x target.
+    0.39 of classic's. That bounds the first run near 2.5x before the
+    preprocess's own costs, which is the target.
   - What is left is a cheaper line: the preprocess would have to trace,
     count, encode and compress a line for clearly less than a classic pass
     traces and transports one.
-- **office2's first run:** 1.52x here, against the 1.5x target. It was
-  1.45x, 1.47x, 1.60x and 1.55x in the four evaluations before, at code
-  whose errors were the same, so it sits on the target. In CPU seconds it
-  is 1.61x here, as in the run before.
+- **office2's first run:** 1.77x here, against the 1.5x target (1.45-1.60x
+  in the five evaluations before, with the first shot at half of
+  `lines.total`; the pilot gives it 0.7 now). In CPU seconds it is 1.89x.
   - Half of classic's squared error is in the room's walls, ceiling and
     desks (the root), and a quarter more in two wall slabs that get few or no
     lines of their own. The hierarchical runs err there as classic does.
-  - The fluorescent strip's box takes the other quarter down to 0.25 of
+  - The fluorescent strip's box takes the other quarter down to 0.21 of
     classic's.
-  - The error ratio at equal lines is 0.91-0.98, so the speed-up is
-    classic's cost beyond its first pass (its later passes: 40 % more lines
-    at 4M) plus its fixed costs. It is 1.75x at the smallest budget and
-    0.97x at the largest (2.11x and 1.18x in the run before: at one budget
-    the host's noise moves it by a fifth).
+  - The error ratio at equal lines is 0.90-0.97, so the speed-up is
+    classic's cost beyond its first pass (its later passes) plus its fixed
+    costs. It is 2.10x at the smallest budget and 1.47x at the largest.
 - **Kept-store solves.** A kept-store solve reads its first shot from the
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is
-  the transport loop over the stored lines and little else. soda's
-  kept-store solve, at 4.14x here (4.61x and 5.14x in the two runs before,
-  with the same errors), is the shortest of all: these times include each program's
-  start-up, about 0.03 s with the exec that asks for huge pages, and at
-  1M lines that is a sixth of a short solve.
+  the transport loop over the stored lines and little else, while classic
+  traces its first shot on every solve. soda's kept-store solve, the
+  slowest against classic (5.24x here; 4.14-5.14x in the three runs before,
+  when its first shot had half the lines), is the shortest of all: these
+  times include each program's start-up, about 0.03 s with the exec that
+  asks for huge pages, and at 1M lines that is a sixth of a short solve.
+- **Scenes of one's own**: `python3 scripts/evaluate.py --scene
+  NAME=CONFIG --docs DIR --work DIR` makes this page for other scenes.
+  Run on RenderPark's graz office (office1/graz.mgf, 13,724 polygons) and
+  classroom (salon/classroom.mgf) at d650bc8's parent, two seeds, 1M to
+  8M lines: graz's error is in its walls, ceiling and floor (the root), the
+  hierarchy errs as classic does at equal lines (1.00-1.01), and its first
+  run was 0.96-1.25x classic's, its kept-store solve 4.0-4.8x; the
+  classroom's first run 1.57-2.48x, kept store 4.3-5.4x (error ratio
+  0.87-0.96). Those runs had the first shot at half of `lines.total`,
+  which on graz held most of the error (docs/performance.md, "First-shot
+  budget").
 """
 
 
