@@ -975,14 +975,17 @@ from this run's CSVs; what follows explains them, from the profiles in
 - **Scenes of one's own**: `python3 scripts/evaluate.py --scene
   NAME=CONFIG --docs DIR --work DIR` makes this page for other scenes.
   Run on RenderPark's graz office (office1/graz.mgf, 13,724 polygons) and
-  classroom (salon/classroom.mgf) at d650bc8's parent, two seeds, 1M to
-  8M lines: graz's error is in its walls, ceiling and floor (the root), the
-  hierarchy errs as classic does at equal lines (1.00-1.01), and its first
-  run was 0.96-1.25x classic's, its kept-store solve 4.0-4.8x; the
-  classroom's first run 1.57-2.48x, kept store 4.3-5.4x (error ratio
-  0.87-0.96). Those runs had the first shot at half of `lines.total`,
-  which on graz held most of the error (docs/performance.md, "First-shot
-  budget").
+  classroom (salon/classroom.mgf), two seeds, 1M to 8M lines. graz's
+  error is in its walls, ceiling and floor (the root), and the hierarchy
+  errs as classic does at equal lines (1.00-1.03). With the first shot at
+  half of `lines.total` (d650bc8's parent), where it held most of graz's
+  error, the first run was 0.96-1.25x classic's and the kept-store solve
+  3.8-4.8x; with the pilot's share (2.6 times `lines.total`, at d650bc8)
+  1.07-1.81x (median 1.39x) and 6.1-7.3x (median 6.47x), and both methods'
+  errors fell by a quarter to a third (classic 6.71 -> 4.66 % at 1M,
+  2.45 -> 1.81 % at 8M). The classroom, at d650bc8's parent: first run
+  1.57-2.48x, kept store 4.3-5.4x (error ratio 0.87-0.96; the pilot's share
+  there is 0.54, near the half it had).
 """
 
 
