@@ -142,7 +142,7 @@ long long first_shot_lines(const Options& options) {
 }
 
 long long first_shot_lines_for_share(const Options& options, double share) {
-  if (!(share > 0)) return std::max<long long>(10'000, options.lines.total / 2);
+  if (!(share > 0)) return first_shot_lines(options);  // called before first_shot.chosen is set
   return std::max<long long>(10'000, std::llround(share * static_cast<double>(options.lines.total)));
 }
 

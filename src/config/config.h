@@ -129,13 +129,14 @@ std::string options_to_toml(const Options& options);
 // The effective configuration as JSON text (for report.json).
 std::string options_to_json(const Options& options);
 
-// Local lines of the first shot: first_shot.lines, or when it is 0 half of
+// Local lines of the first shot: first_shot.lines; where it is 0,
+// first_shot.chosen (the pilot's or the store's count), else half of
 // lines.total (at least 10,000), so that the first shot's noise falls with
-// the line budget (docs/algorithm.md, "First shot").
-// first_shot.lines; where it is 0, first_shot.chosen, else half of lines.total (at least 10,000).
+// the line budget (docs/algorithm.md, "First shot", "First-shot share").
 long long first_shot_lines(const Options& options);
 // The first-shot lines for a share of lines.total the pilot chose (at least
-// 10,000); half of lines.total where the pilot had none (nothing emits).
+// 10,000); where it had none (nothing emits), first_shot_lines of `options`,
+// whose first_shot.chosen is not yet set: half of lines.total.
 long long first_shot_lines_for_share(const Options& options, double share);
 
 // Number of worker threads the options ask for.
