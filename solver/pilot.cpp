@@ -165,11 +165,16 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
   for (size_t f = 0; f < faces; ++f) {
     const double rho = mean(scene.materials[mesh.patches[mesh.face_patch[f]].material].rho);
     pilot.global_variance += rho * rho * (variance[f] >= 0 ? variance[f] : imputed);
+    if (crossings[f] > 0) pilot.global_mean_square += rho * rho * seen[f] / crossings[f];
   }
-  if (per_area > 0) pilot.global_variance /= per_area;
+  if (per_area > 0) {
+    pilot.global_variance /= per_area;
+    pilot.global_mean_square /= per_area;
+  }
   // Per line: the variances fall as one over the lines.
   pilot.first_shot_variance *= static_cast<double>(lines);
   pilot.global_variance *= static_cast<double>(lines);
+  pilot.global_mean_square *= static_cast<double>(lines);
   pilot.hits_per_line = line_hits / static_cast<double>(lines);
   return pilot;
 }

@@ -25,6 +25,14 @@ struct Pilot {
   // the global lines carry from it (per global line of the scene's box).
   double first_shot_variance = 0;
   double global_variance = 0;
+  // global_variance with each face's mean square of the radiosity it sees in
+  // place of its variance: what the global lines' first bounce would add if
+  // a face's crossing count varied as a Poisson count does. A pass's counts
+  // vary less (the default lines are stratified, and a face sends no more
+  // than its power however often it is crossed), so its first-bounce
+  // variance lies between the two (test
+  // PilotGlobal.APassVariesBetweenTheTwoFigures).
+  double global_mean_square = 0;
   // Patch crossings per global line.
   double hits_per_line = 0;
   bool empty() const { return box_weights.empty(); }
