@@ -17,6 +17,7 @@ namespace {
 
 constexpr unsigned kFirstShotStream = 1;
 constexpr unsigned kLightStream = 6;
+constexpr unsigned kEmitterShiftStream = 1000;  // above the line orders' 8 + box
 
 double face_power(const RadiosityState& s, int f) {
   double p = 0;
@@ -53,6 +54,19 @@ std::vector<double> emitter_crossings(const Options& options, std::vector<double
 }
 
 Rng first_shot_rng(unsigned long long seed, uint64_t block) { return make_rng(seed, kFirstShotStream, block); }
+
+EmitterPoints::EmitterPoints(unsigned long long seed, size_t emitter) : emitter_(emitter) {
+  Rng rng = make_rng(seed, kEmitterShiftStream, emitter);
+  for (double& s : shift_) s = uniform(rng);
+}
+
+void EmitterPoints::point(uint64_t index, double u[4]) const {
+  static constexpr unsigned kBases[4] = {2, 3, 5, 7};
+  for (int k = 0; k < 4; ++k) {
+    const double x = radical_inverse(index, kBases[k]) + shift_[k];
+    u[k] = x >= 1.0 ? x - 1.0 : x;
+  }
+}
 
 FirstShotPlan plan_first_shot(const PatchMesh& mesh, const RadiosityState& state, long long budget,
                               const std::vector<double>& global_crossings) {
@@ -106,6 +120,7 @@ RunFirstShot plan_run_first_shot(const Options& options, const PatchMesh& mesh, 
   RunFirstShot run;
   run.plan = plan_first_shot(mesh, state, lights.empty() ? first_shot_lines(options) : share(faces_power),
                              emitter_crossings(options, std::move(crossings)));
+  run.plan.halton = options.first_shot.sequence == "halton";
   for (const PointLight& l : lights) run.light_lines.push_back(std::max<long long>(10'000, share(l.power() * state.channels)));
   return run;
 }
@@ -154,6 +169,7 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   // Merge in shard order: the result does not depend on scheduling.
   merge_received(acc, state);
   stats.lines = total;
+  stats.halton = plan.halton;
   stats.emitter_faces = plan.emitters.size();
   stats.global_emitter_faces = plan.global_faces.size();
   if (accelerated) {

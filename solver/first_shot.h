@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,7 @@ struct FirstShotStats {
   uint64_t associated_hits = 0;      // accelerated: lines ended on an associated patch
   double seconds = 0;
   bool stored = false;         // read from the store's first_shot.bin instead of traced
+  bool halton = true;          // the points' sequence (first_shot.sequence, or the store's)
   std::string traced_because;  // with a store: why its first shot was not used
 };
 
@@ -49,13 +51,14 @@ inline bool code_contact(uint32_t code) { return code != kEscaped && (code - 1) 
 // One past the largest code of a mesh of `faces` faces.
 inline uint32_t code_limit(size_t faces) { return met_code(static_cast<int>(faces) - 1, true) + 1; }
 
-// One local line from `face`: a uniform point of its patch, a cosine-
-// distributed direction; returns what it meets first (`nearest(patch, org, dir)`).
+// One local line from `face`: the point of its patch that u[0], u[1] give,
+// the cosine-distributed direction of u[2], u[3] (all in [0, 1)); returns
+// what it meets first (`nearest(patch, org, dir)`).
 template <typename Nearest>
-uint32_t local_line_outcome(const PatchMesh& mesh, int face, Rng& rng, const Nearest& nearest) {
+uint32_t local_line_outcome(const PatchMesh& mesh, int face, const double u[4], const Nearest& nearest) {
   const int patch = mesh.face_patch[face];
   const Vec3 n = mesh.face_normal(face);
-  const Vec3 org = uniform_point(mesh, mesh.patches[patch], rng);
+  const Vec3 org = uniform_point(mesh, mesh.patches[patch], u[0], u[1]);
   if (mesh.may_touch(patch)) {
     // Where the face touches another, a line along the normal meets it at
     // distance 0, whatever the direction the cosine draws next (grazing
@@ -63,10 +66,18 @@ uint32_t local_line_outcome(const PatchMesh& mesh, int face, Rng& rng, const Nea
     const NearestHit probe = nearest(patch, org, n);
     if (probe.patch >= 0 && mesh.touching(patch, probe.patch)) return met_code(mesh.face_met(probe.patch, n), true);
   }
-  const Vec3 dir = cosine_direction(n, rng);
+  const Vec3 dir = cosine_direction(n, u[2], u[3]);
   const NearestHit hit = nearest(patch, org, dir);
   if (hit.patch < 0) return kEscaped;
   return met_code(mesh.face_met(hit.patch, dir), mesh.touching(patch, hit.patch));
+}
+
+// The same with four independent numbers of `rng`.
+template <typename Nearest>
+uint32_t local_line_outcome(const PatchMesh& mesh, int face, Rng& rng, const Nearest& nearest) {
+  double u[4];
+  for (double& x : u) x = uniform(rng);
+  return local_line_outcome(mesh, face, u, nearest);
 }
 
 // `power` from `face` to where a line of outcome `code` took it.
@@ -94,6 +105,9 @@ struct FirstShotPlan {
   std::vector<int> emitters;          // in face order
   std::vector<uint64_t> first{0};     // first line of each emitter; first.back() = lines in all
   std::vector<int> global_faces;      // emitting faces whose emission the global lines shoot
+  // first_shot.sequence: each emitter's lines take the points of a
+  // randomised Halton sequence of its own (true) or independent ones.
+  bool halton = true;
   uint64_t lines() const { return first.back(); }
   uint64_t count(size_t e) const { return first[e + 1] - first[e]; }
   uint64_t blocks() const;  // of kFirstShotBlock lines, the last one partly filled
@@ -127,6 +141,23 @@ inline constexpr uint64_t kFirstShotBlock = 4096;
 inline uint64_t FirstShotPlan::blocks() const { return (lines() + kFirstShotBlock - 1) / kFirstShotBlock; }
 Rng first_shot_rng(unsigned long long seed, uint64_t block);
 
+// The points of emitter e's lines with first_shot.sequence = "halton": its
+// j-th line takes the j-th point of the Halton sequence in bases 2, 3, 5 and
+// 7, shifted modulo 1 by a random vector of e's own (a Cranley-Patterson
+// rotation: every point is uniform, so the shot stays unbiased, and an
+// emitter's lines are spread evenly over its patch and its hemisphere). The
+// same whatever block or thread a line falls in.
+class EmitterPoints {
+ public:
+  EmitterPoints(unsigned long long seed, size_t emitter);
+  size_t emitter() const { return emitter_; }
+  void point(uint64_t index, double u[4]) const;
+
+ private:
+  size_t emitter_;
+  double shift_[4];
+};
+
 // Calls line(e, code) for lines [block * kFirstShotBlock, ...) of block
 // `block` of `plan` in order (e: the emitter's index in the plan).
 template <typename Nearest, typename Line>
@@ -135,9 +166,17 @@ void trace_first_shot_block(const PatchMesh& mesh, const FirstShotPlan& plan, un
   Rng rng = first_shot_rng(seed, block);
   const uint64_t lo = block * kFirstShotBlock, hi = std::min(plan.lines(), lo + kFirstShotBlock);
   size_t e = std::upper_bound(plan.first.begin(), plan.first.end(), lo) - plan.first.begin() - 1;
+  std::optional<EmitterPoints> points;
   for (uint64_t l = lo; l < hi; ++l) {
     while (l >= plan.first[e + 1]) ++e;
-    line(e, local_line_outcome(mesh, plan.emitters[e], rng, nearest));
+    if (!plan.halton) {
+      line(e, local_line_outcome(mesh, plan.emitters[e], rng, nearest));
+      continue;
+    }
+    if (!points || points->emitter() != e) points.emplace(seed, e);
+    double u[4];
+    points->point(l - plan.first[e], u);
+    line(e, local_line_outcome(mesh, plan.emitters[e], u, nearest));
   }
 }
 

@@ -119,6 +119,7 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
                       {"associated_hits", r.shot.associated_hits},
                       {"global_emitter_faces", r.shot.global_emitter_faces}, {"from_checkpoint", r.resumed},
                       {"from_store", r.shot.stored}, {"traced_because", r.shot.traced_because},
+                      {"sequence", r.shot.halton ? "halton" : "random"},
                       {"lines_from", r.shot_lines_from}, {"pilot_share", r.shot_share},
                       {"pilot_seconds", r.pilot_seconds}}},
       {"lights", [&] {

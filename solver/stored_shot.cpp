@@ -31,7 +31,8 @@ namespace {
 // blocks of kFirstShotBlock lines a frame; then the end magic.
 constexpr char kMagic[8] = {'M', 'P', 'F', 'S', 'H', 'O', 'T', '1'};
 constexpr char kEndMagic[8] = {'M', 'P', 'F', 'S', 'E', 'N', 'D', '1'};
-constexpr uint64_t kVersion = 1;
+// 1: independent points; 2: the plan ends with its sequence (1: Halton).
+constexpr uint64_t kVersion = 2;
 constexpr uint64_t kBlocksPerFrame = 64;
 
 uint64_t frame_count(const FirstShotPlan& plan) {
@@ -55,6 +56,7 @@ std::string encode_plan(const FirstShotPlan& plan, unsigned long long seed, size
     put_varint(raw, static_cast<uint64_t>(f - previous));
     previous = f;
   }
+  put_varint(raw, plan.halton ? 1 : 0);
   return raw;
 }
 
@@ -172,7 +174,8 @@ FirstShotPlan decode_plan(ShotReader& reader, size_t faces, unsigned long long& 
     if (!get_varint(data, raw.size(), pos, v) || v > limit) reader.fail("plan: corrupted");
     return v;
   };
-  if (next(UINT64_MAX) != kVersion) reader.fail("plan: written by another version of mpath");
+  const uint64_t version = next(UINT64_MAX);
+  if (version != 1 && version != kVersion) reader.fail("plan: written by another version of mpath");
   seed = next(UINT64_MAX);
   if (next(UINT64_MAX) != kFirstShotBlock || next(UINT64_MAX) != kBlocksPerFrame)
     reader.fail("plan: written by another version of mpath");
@@ -199,6 +202,7 @@ FirstShotPlan decode_plan(ShotReader& reader, size_t faces, unsigned long long& 
     previous = next_face(previous);
     plan.global_faces.push_back(previous);
   }
+  plan.halton = version >= 2 && next(1) == 1;
   if (pos != raw.size()) reader.fail("plan: corrupted");
   return plan;
 }
@@ -262,7 +266,13 @@ std::string replay_stored_shot(const fs::path& path, const PatchMesh& mesh, cons
   unsigned long long stored_seed = 0;
   const FirstShotPlan stored = decode_plan(reader, mesh.face_count(), stored_seed);
   if (stored_seed != seed) return fmt::format("the store's first shot was drawn with lines.seed = {}", stored_seed);
-  if (!(stored == plan)) return plan_difference(plan, stored);
+  // The store's points, Halton or independent, serve any run: both give
+  // an unbiased shot (stores made before first_shot.sequence hold
+  // independent ones).
+  FirstShotPlan same = stored;
+  same.halton = plan.halton;
+  if (!(same == plan)) return plan_difference(plan, stored);
+  stats.halton = stored.halton;
 
   // Decoded and checked in full before the state changes.
   ShardAccumulator acc;

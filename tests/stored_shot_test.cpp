@@ -239,16 +239,34 @@ TEST(StoredShot, ADamagedFileIsAnErrorNamingIt) {
   EXPECT_NE(message_of([&] { read_stored_plan(path, s.mesh.face_count() + 1, seed); })
                 .find("plan: made for a mesh of another number of faces"),
             std::string::npos);
-  // A plan frame of another format version, well formed otherwise.
-  std::string raw;
-  for (uint64_t v : {2, 1, 4096, 64}) linestore::put_varint(raw, v);
-  const std::string frame = linestore::zstd_compress(raw, 3, true);
-  std::string file = good.substr(0, 8);
-  for (uint64_t v : {uint64_t{raw.size()}, uint64_t{frame.size()}})
-    for (int i = 0; i < 8; ++i) file += static_cast<char>(v >> (8 * i));
-  test::write_file(path, file + frame);
+  // The plan's points: the good file's are Halton (first_shot.sequence's default).
+  test::write_file(path, good);
+  EXPECT_TRUE(read_stored_plan(path, s.mesh.face_count(), seed).halton);
+  // A plan frame alone, of the given varints.
+  const auto plan_file = [&](std::initializer_list<uint64_t> values) {
+    std::string raw;
+    for (uint64_t v : values) linestore::put_varint(raw, v);
+    const std::string frame = linestore::zstd_compress(raw, 3, true);
+    std::string file = good.substr(0, 8);
+    for (uint64_t v : {uint64_t{raw.size()}, uint64_t{frame.size()}})
+      for (int i = 0; i < 8; ++i) file += static_cast<char>(v >> (8 * i));
+    test::write_file(path, file + frame);
+  };
+  // Another format version, well formed otherwise.
+  plan_file({3, 1, 4096, 64});
   EXPECT_NE(message_of([&] { read_stored_plan(path, s.mesh.face_count(), seed); })
                 .find("plan: written by another version of mpath"),
+            std::string::npos);
+  // Version 1 (before first_shot.sequence): independent points, no sequence field.
+  plan_file({1, 7, 4096, 64, uint64_t{s.mesh.face_count()}, 1, 3, 100, 0});
+  const FirstShotPlan v1 = read_stored_plan(path, s.mesh.face_count(), seed);
+  EXPECT_FALSE(v1.halton);
+  EXPECT_EQ(seed, 7u);
+  EXPECT_EQ(v1.emitters, std::vector<int>{2});
+  EXPECT_EQ(v1.lines(), 100u);
+  // Version 2 with a sequence other than 0 or 1.
+  plan_file({2, 7, 4096, 64, uint64_t{s.mesh.face_count()}, 1, 3, 100, 0, 2});
+  EXPECT_NE(message_of([&] { read_stored_plan(path, s.mesh.face_count(), seed); }).find("plan: corrupted"),
             std::string::npos);
 }
 

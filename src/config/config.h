@@ -77,6 +77,9 @@ struct Options {
     // often than it would get local lines is shot by the global lines;
     // "local": every emitter face is shot with local lines.
     std::string mode = "auto";
+    // "halton": an emitter's lines take the points of a randomised Halton
+    // sequence of its own (stratified); "random": independent points.
+    std::string sequence = "halton";
   } first_shot;
 
   struct Solver {

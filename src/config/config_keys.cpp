@@ -436,6 +436,10 @@ std::vector<ConfigKey> make_table() {
        "`\"auto\"`: an emitting face that global lines sample better is shot by them; `\"local\"`: every emitter by "
        "local lines",
        SET(o.first_shot.mode = get_choice(n, s, "mode", {"auto", "local"})), GET(o.first_shot.mode)},
+      {"first_shot.sequence",
+       "`\"halton\"` (each emitting face's lines stratified by a randomised Halton sequence of its own) or "
+       "`\"random\"`; see algorithm.md",
+       SET(o.first_shot.sequence = get_choice(n, s, "sequence", {"random", "halton"})), GET(o.first_shot.sequence)},
       {"solver.method",
        "`\"hierarchical\"`, `\"multipath\"` (stored lines, root box only) or `\"classic\"` (fresh lines, no store)",
        SET(o.solver.method = get_method(n, s)), GET(std::string(to_string(o.solver.method)))},

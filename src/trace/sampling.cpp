@@ -1,6 +1,7 @@
 #include "sampling.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numbers>
 #include <vector>
 
@@ -25,15 +26,32 @@ Vec3 cosine_direction(const Vec3& n, double u1, double u2) {
 }
 
 namespace {
-Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, Rng& rng) {
-  double u = uniform(rng), v = uniform(rng);
+Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, double u, double v) {
   if (u + v > 1) {
     u = 1 - u;
     v = 1 - v;
   }
   return a + (b - a) * u + (c - a) * v;
 }
+
+Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, Rng& rng) {
+  const double u = uniform(rng), v = uniform(rng);
+  return triangle_point(a, b, c, u, v);
+}
 }  // namespace
+
+Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, double u1, double u2) {
+  const Vec3& v0 = mesh.vertices[p.v[0]];
+  const Vec3& v1 = mesh.vertices[p.v[1]];
+  const Vec3& v2 = mesh.vertices[p.v[2]];
+  if (p.is_triangle()) return triangle_point(v0, v1, v2, u1, u2);
+  const Vec3& v3 = mesh.vertices[p.v[3]];
+  const double a1 = 0.5 * length(cross(v1 - v0, v3 - v0));
+  const double a2 = 0.5 * length(cross(v3 - v2, v1 - v2));
+  const double c = a1 / (a1 + a2);
+  if (u1 < c) return triangle_point(v0, v1, v3, u1 / c, u2);
+  return triangle_point(v2, v3, v1, std::min((u1 - c) / (1 - c), std::nextafter(1.0, 0.0)), u2);
+}
 
 Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, Rng& rng) {
   const Vec3& v0 = mesh.vertices[p.v[0]];

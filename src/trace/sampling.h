@@ -23,6 +23,10 @@ Vec3 cosine_direction(const Vec3& n, double u1, double u2);
 
 // Uniform point on a patch (a quad is split as Embree splits it).
 Vec3 uniform_point(const PatchMesh& mesh, const Patch& patch, Rng& rng);
+// The same from two numbers in [0, 1): the first picks a quad's triangle by
+// area and is stretched back to [0, 1), so stratified numbers give
+// stratified points.
+Vec3 uniform_point(const PatchMesh& mesh, const Patch& patch, double u1, double u2);
 
 // A segment of a uniformly distributed line through a box: starts a hair
 // outside the box and ends a hair past the far side.
