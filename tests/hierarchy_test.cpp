@@ -182,6 +182,51 @@ TEST(PilotBudget, SpendsTheLinesWhereItsModelSaysTheErrorIs) {
   EXPECT_EQ(box_line_budget(h, o, {}), box_line_budget(h, q, {}));
 }
 
+// The furnished room (every surface rho) lit by a small lamp on its ceiling
+// (9 emitting faces at 0.05 m2 patches) or by the whole ceiling glowing (486).
+Scene lamp_room(double rho, bool small_lamp) {
+  Scene scene = furnished_room(rho, 0.0);
+  const int lamp = test::add_material(scene, "lamp", 0.0, small_lamp ? 20.0 : 1.0);
+  if (small_lamp)
+    test::add_quad(scene, {1.2, 1.5, 2.49}, {1.2, 2.0, 2.49}, {1.7, 2.0, 2.49}, {1.7, 1.5, 2.49}, lamp,
+                   test::add_object(scene, "lamp"));
+  else
+    test::add_quad(scene, {0.01, 0.01, 2.49}, {0.01, 3.99, 2.49}, {5.99, 3.99, 2.49}, {5.99, 0.01, 2.49}, lamp,
+                   test::add_object(scene, "lamp"));
+  return scene;
+}
+
+// Each face's mean and variance over solves of the reflected radiosity (mean
+// of the channels, W/m2), and the variances' sum weighted by area.
+class FaceSpread {
+ public:
+  explicit FaceSpread(const PatchMesh& mesh) : mesh_(mesh), sum_(mesh.face_count()), sum2_(mesh.face_count()) {}
+  void add(const RadiosityState& state) {
+    ++n_;
+    for (size_t f = 0; f < mesh_.face_count(); ++f) {
+      double reflected = 0;
+      for (int c = 0; c < state.channels; ++c)
+        reflected += (state.phi[state.at(f, c)] - state.emitted_power[state.at(f, c)]) / state.channels;
+      const double b = reflected / mesh_.patches[mesh_.face_patch[f]].area;
+      sum_[f] += b;
+      sum2_[f] += b * b;
+    }
+  }
+  int count() const { return n_; }
+  double mean(size_t f) const { return sum_[f] / n_; }
+  double variance(size_t f) const { return (sum2_[f] - n_ * mean(f) * mean(f)) / (n_ - 1); }
+  double area_weighted_variance() const {
+    double v = 0;
+    for (size_t f = 0; f < mesh_.face_count(); ++f) v += mesh_.patches[mesh_.face_patch[f]].area * variance(f);
+    return v;
+  }
+
+ private:
+  const PatchMesh& mesh_;
+  std::vector<double> sum_, sum2_;
+  int n_ = 0;
+};
+
 // The pilot's first-shot variance (pilot.h) against the first shot itself:
 // the area-weighted variance of the reflected radiosity that independent
 // first shots of `lines` local lines give (first_shot.sequence = "random"),
@@ -191,14 +236,7 @@ TEST(PilotBudget, SpendsTheLinesWhereItsModelSaysTheErrorIs) {
 // to 4.
 TEST(PilotFirstShot, ItsVarianceIsTheFirstShotsOwn) {
   for (const bool small_lamp : {true, false}) {
-    Scene scene = furnished_room(0.5, 0.0);
-    const int lamp = test::add_material(scene, "lamp", 0.0, small_lamp ? 20.0 : 1.0);
-    if (small_lamp)
-      test::add_quad(scene, {1.2, 1.5, 2.49}, {1.2, 2.0, 2.49}, {1.7, 2.0, 2.49}, {1.7, 1.5, 2.49}, lamp,
-                     test::add_object(scene, "lamp"));
-    else
-      test::add_quad(scene, {0.01, 0.01, 2.49}, {0.01, 3.99, 2.49}, {5.99, 3.99, 2.49}, {5.99, 0.01, 2.49}, lamp,
-                     test::add_object(scene, "lamp"));
+    const Scene scene = lamp_room(0.5, small_lamp);
     const PatchMesh mesh = build_mesh(scene, 0.05);
     const Pilot pilot = run_pilot(scene, mesh, nullptr, 1, 200'000);
     ASSERT_FALSE(pilot.empty());
@@ -206,28 +244,16 @@ TEST(PilotFirstShot, ItsVarianceIsTheFirstShotsOwn) {
     ASSERT_GT(pilot.global_variance, 0);
     EXPECT_GT(pilot.hits_per_line, 1.0);
     const Tracer tracer(mesh);
-    constexpr int kSeeds = 12;
     const long long lines = 20'000;
-    std::vector<double> sum(mesh.face_count(), 0.0), sum2(mesh.face_count(), 0.0);
-    for (int seed = 1; seed <= kSeeds; ++seed) {
+    FaceSpread spread(mesh);
+    for (int seed = 1; seed <= 12; ++seed) {
       RadiosityState state = make_state(scene, mesh);
       FirstShotPlan plan = plan_first_shot(mesh, state, lines, {});
       plan.halton = false;
       first_shot(mesh, tracer, state, plan, static_cast<unsigned long long>(seed), 2);
-      for (size_t f = 0; f < mesh.face_count(); ++f) {
-        double reflected = 0;  // W, mean of the channels
-        for (int c = 0; c < state.channels; ++c)
-          reflected += (state.phi[state.at(f, c)] - state.emitted_power[state.at(f, c)]) / state.channels;
-        const double b = reflected / mesh.patches[mesh.face_patch[f]].area;
-        sum[f] += b;
-        sum2[f] += b * b;
-      }
+      spread.add(state);
     }
-    double measured = 0;
-    for (size_t f = 0; f < mesh.face_count(); ++f) {
-      const double mean = sum[f] / kSeeds;
-      measured += mesh.patches[mesh.face_patch[f]].area * (sum2[f] - kSeeds * mean * mean) / (kSeeds - 1);
-    }
+    const double measured = spread.area_weighted_variance();
     const double model = pilot.first_shot_variance / static_cast<double>(lines);
     // Thousands of faces each add a variance estimated from 12 samples (a
     // relative spread of sqrt(2/11) each), so the sum is good to a few per
@@ -242,63 +268,41 @@ TEST(PilotFirstShot, ItsVarianceIsTheFirstShotsOwn) {
 // first_shot.sequence = "halton" against "random" (first_shot.h,
 // EmitterPoints): 10 seeds of each, 100,000 lines, on the furnished room lit
 // by a small lamp (9 emitting faces, about 11,000 lines each) or a glowing
-// ceiling (486, about 200 each). Unbiased: over the faces, the area-weighted squared
-// difference of the two means is what their variances over the seeds
-// predict (its expectation, were the Halton shot biased, would grow by the
-// bias squared). Stratified: each face's variance falls, the most where a
-// face shoots many lines.
+// ceiling (486, about 200 each). Unbiased: over the faces, the area-weighted
+// squared difference of the two means is what their variances over the
+// seeds predict (its expectation, were the Halton shot biased, would grow by
+// the bias squared). Stratified: each face's variance falls, the most where
+// a face shoots many lines.
 TEST(FirstShotSequence, HaltonPointsAreUnbiasedAndSpreadLess) {
   for (const bool small_lamp : {true, false}) {
-    Scene scene = furnished_room(0.5, 0.0);
-    const int lamp = test::add_material(scene, "lamp", 0.0, small_lamp ? 20.0 : 1.0);
-    if (small_lamp)
-      test::add_quad(scene, {1.2, 1.5, 2.49}, {1.2, 2.0, 2.49}, {1.7, 2.0, 2.49}, {1.7, 1.5, 2.49}, lamp,
-                     test::add_object(scene, "lamp"));
-    else
-      test::add_quad(scene, {0.01, 0.01, 2.49}, {0.01, 3.99, 2.49}, {5.99, 3.99, 2.49}, {5.99, 0.01, 2.49}, lamp,
-                     test::add_object(scene, "lamp"));
+    const Scene scene = lamp_room(0.5, small_lamp);
     const PatchMesh mesh = build_mesh(scene, 0.05);
     const Tracer tracer(mesh);
-    constexpr int kSeeds = 10;
-    const size_t faces = mesh.face_count();
-    std::vector<double> mean[2], var[2];
-    for (const bool halton : {false, true}) {
-      std::vector<double> sum(faces, 0.0), sum2(faces, 0.0);
-      for (int seed = 1; seed <= kSeeds; ++seed) {
+    std::vector<FaceSpread> spread(2, FaceSpread(mesh));  // random, Halton
+    for (const bool halton : {false, true})
+      for (int seed = 1; seed <= 10; ++seed) {
         RadiosityState state = make_state(scene, mesh);
         FirstShotPlan plan = plan_first_shot(mesh, state, 100'000, {});
         plan.halton = halton;
         EXPECT_EQ(first_shot(mesh, tracer, state, plan, static_cast<unsigned long long>(seed), 2).halton, halton);
-        for (size_t f = 0; f < faces; ++f) {
-          double reflected = 0;  // W, mean of the channels
-          for (int c = 0; c < state.channels; ++c)
-            reflected += (state.phi[state.at(f, c)] - state.emitted_power[state.at(f, c)]) / state.channels;
-          const double b = reflected / mesh.patches[mesh.face_patch[f]].area;
-          sum[f] += b;
-          sum2[f] += b * b;
-        }
+        spread[halton].add(state);
       }
-      for (size_t f = 0; f < faces; ++f) {
-        mean[halton].push_back(sum[f] / kSeeds);
-        var[halton].push_back((sum2[f] - kSeeds * mean[halton][f] * mean[halton][f]) / (kSeeds - 1));
-      }
+    double difference = 0, expected = 0;
+    for (size_t f = 0; f < mesh.face_count(); ++f) {
+      const double area = mesh.patches[mesh.face_patch[f]].area, d = spread[1].mean(f) - spread[0].mean(f);
+      difference += area * d * d;
+      expected += area * (spread[0].variance(f) + spread[1].variance(f)) / spread[0].count();
     }
-    double difference = 0, expected = 0, spread[2] = {0, 0};
-    for (size_t f = 0; f < faces; ++f) {
-      const double area = mesh.patches[mesh.face_patch[f]].area;
-      difference += area * (mean[1][f] - mean[0][f]) * (mean[1][f] - mean[0][f]);
-      expected += area * (var[0][f] + var[1][f]) / kSeeds;
-      for (int h = 0; h < 2; ++h) spread[h] += area * var[h][f];
-    }
+    const double ratio = spread[1].area_weighted_variance() / spread[0].area_weighted_variance();
     const char* what = small_lamp ? "small lamp" : "glowing ceiling";
     std::printf("%s: squared difference of the means / expected %.3f, variance Halton / random %.3f\n", what,
-                difference / expected, spread[1] / spread[0]);
+                difference / expected, ratio);
     // A sum over thousands of faces, each a ratio good to sqrt(2 / 9) or so:
     // well within 1.3 where there is no bias.
     EXPECT_LT(difference / expected, 1.3) << what;
     EXPECT_GT(difference / expected, 0.7) << what;
-    EXPECT_LT(spread[1] / spread[0], small_lamp ? 0.7 : 0.95) << what;
-    EXPECT_GT(spread[1] / spread[0], 0.05) << what;  // each seed shifts the points: the shots differ
+    EXPECT_LT(ratio, small_lamp ? 0.7 : 0.95) << what;
+    EXPECT_GT(ratio, 0.05) << what;  // each seed shifts the points: the shots differ
   }
 }
 
@@ -316,14 +320,7 @@ TEST(FirstShotSequence, HaltonPointsAreUnbiasedAndSpreadLess) {
 TEST(PilotGlobal, APassVariesBetweenTheTwoFigures) {
   for (const double rho : {0.2, 0.5})
     for (const bool small_lamp : {true, false}) {
-      Scene scene = furnished_room(rho, 0.0);
-      const int lamp = test::add_material(scene, "lamp", 0.0, small_lamp ? 20.0 : 1.0);
-      if (small_lamp)
-        test::add_quad(scene, {1.2, 1.5, 2.49}, {1.2, 2.0, 2.49}, {1.7, 2.0, 2.49}, {1.7, 1.5, 2.49}, lamp,
-                       test::add_object(scene, "lamp"));
-      else
-        test::add_quad(scene, {0.01, 0.01, 2.49}, {0.01, 3.99, 2.49}, {5.99, 3.99, 2.49}, {5.99, 0.01, 2.49}, lamp,
-                       test::add_object(scene, "lamp"));
+      const Scene scene = lamp_room(rho, small_lamp);
       const PatchMesh mesh = build_mesh(scene, 0.05);
       const Pilot pilot = run_pilot(scene, mesh, nullptr, 1, 200'000);
       ASSERT_GT(pilot.global_variance, 0);
@@ -331,27 +328,14 @@ TEST(PilotGlobal, APassVariesBetweenTheTwoFigures) {
       const Tracer tracer(mesh);
       RadiosityState shot = make_state(scene, mesh);
       first_shot(mesh, tracer, shot, plan_first_shot(mesh, shot, 1'000'000, {}), 99, 2);
-      constexpr int kSeeds = 12;
       const uint64_t lines = 20'000;
-      std::vector<double> sum(mesh.face_count(), 0.0), sum2(mesh.face_count(), 0.0);
-      for (int seed = 1; seed <= kSeeds; ++seed) {
+      FaceSpread spread(mesh);
+      for (int seed = 1; seed <= 12; ++seed) {
         RadiosityState state = shot;
         classic_pass(mesh, tracer, state, lines, static_cast<unsigned long long>(seed), 1, 8, LineOptions{}.sequence);
-        for (size_t f = 0; f < mesh.face_count(); ++f) {
-          double reflected = 0;  // W, mean of the channels
-          for (int c = 0; c < state.channels; ++c)
-            reflected += (state.phi[state.at(f, c)] - state.emitted_power[state.at(f, c)]) / state.channels;
-          const double b = reflected / mesh.patches[mesh.face_patch[f]].area;
-          sum[f] += b;
-          sum2[f] += b * b;
-        }
+        spread.add(state);
       }
-      double measured = 0;
-      for (size_t f = 0; f < mesh.face_count(); ++f) {
-        const double mean = sum[f] / kSeeds;
-        measured += mesh.patches[mesh.face_patch[f]].area * (sum2[f] - kSeeds * mean * mean) / (kSeeds - 1);
-      }
-      measured *= static_cast<double>(lines);
+      const double measured = spread.area_weighted_variance() * static_cast<double>(lines);
       const std::string what = fmt::format("rho {} {}", rho, small_lamp ? "small lamp" : "glowing ceiling");
       // As in ItsVarianceIsTheFirstShotsOwn, the sum is good to a few per
       // cent, and the pilot's 200,000 lines add about as much: 15 % allowed.
