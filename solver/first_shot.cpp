@@ -60,13 +60,7 @@ EmitterPoints::EmitterPoints(unsigned long long seed, size_t emitter) : emitter_
   for (double& s : shift_) s = uniform(rng);
 }
 
-void EmitterPoints::point(uint64_t index, double u[4]) const {
-  static constexpr unsigned kBases[4] = {2, 3, 5, 7};
-  for (int k = 0; k < 4; ++k) {
-    const double x = radical_inverse(index, kBases[k]) + shift_[k];
-    u[k] = x >= 1.0 ? x - 1.0 : x;
-  }
-}
+void EmitterPoints::point(uint64_t index, double u[4]) const { shifted_halton(index, shift_, u); }
 
 FirstShotPlan plan_first_shot(const PatchMesh& mesh, const RadiosityState& state, long long budget,
                               const std::vector<double>& global_crossings) {

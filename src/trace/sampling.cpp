@@ -130,9 +130,13 @@ void LineSequence::point(uint64_t index, Rng& rng, double u[4]) const {
     for (int k = 0; k < 4; ++k) u[k] = uniform(rng);
     return;
   }
+  shifted_halton(index, shift_, u);
+}
+
+void shifted_halton(uint64_t index, const double shift[4], double u[4]) {
   static constexpr unsigned kBases[4] = {2, 3, 5, 7};
   for (int k = 0; k < 4; ++k) {
-    const double x = radical_inverse(index, kBases[k]) + shift_[k];
+    const double x = radical_inverse(index, kBases[k]) + shift[k];
     u[k] = x >= 1.0 ? x - 1.0 : x;
   }
 }

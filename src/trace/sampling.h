@@ -67,5 +67,8 @@ class LineSequence {
 };
 
 double radical_inverse(uint64_t index, unsigned base);
+// Point `index` of the Halton sequence in bases 2, 3, 5 and 7, each
+// coordinate shifted by shift[k] modulo 1 (a Cranley-Patterson rotation).
+void shifted_halton(uint64_t index, const double shift[4], double u[4]);
 
 }  // namespace mpath
