@@ -17,6 +17,7 @@ namespace {
 
 constexpr unsigned kFirstShotStream = 1;
 constexpr unsigned kLightStream = 6;
+constexpr unsigned long long kLightShiftIndex = 1ULL << 32;  // above any shard's index
 constexpr unsigned kEmitterShiftStream = 1000;  // above the line orders' 8 + box
 
 double face_power(const RadiosityState& s, int f) {
@@ -183,20 +184,30 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
 }
 
 uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const PointLight& light,
-                     long long lines, unsigned long long seed, int shards) {
+                     long long lines, unsigned long long seed, int shards, bool halton) {
   const int ch = state.channels;
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   const double power = light.power();  // white: the same radiant power in every channel
   for (int c = 0; c < ch; ++c) state.energy.emitted[c] += power;
   const uint64_t n = power > 0 ? static_cast<uint64_t>(std::max<long long>(lines, 1)) : 0;
   if (n == 0) return 0;
+  // The Halton points' shift: the light's stream, past the shards' indices.
+  double shift[4];
+  {
+    Rng rng = make_rng(seed, kLightStream, kLightShiftIndex);
+    for (double& v : shift) v = uniform(rng);
+  }
   std::vector<ShardAccumulator> acc(shards);
   run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
     ShardAccumulator& a = acc[s];
     Rng rng = make_rng(seed, kLightStream, static_cast<unsigned long long>(s));
     const double share[3] = {power / static_cast<double>(n), power / static_cast<double>(n), power / static_cast<double>(n)};
     for (uint64_t k = n * s / shards; k < n * (s + 1) / shards; ++k) {
-      const Vec3 dir = light.sample(uniform(rng), uniform(rng), uniform(rng));
+      double u[4];
+      if (halton) shifted_halton(k, shift, u);
+      else
+        for (int i = 0; i < 3; ++i) u[i] = uniform(rng);
+      const Vec3 dir = light.sample(u[0], u[1], u[2]);
       const NearestHit hit = tracer.nearest(light.options.position, dir, 0.0, tfar);
       ++a.lines;
       if (hit.patch < 0) {

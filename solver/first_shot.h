@@ -191,9 +191,12 @@ void leave_to_global_lines(const FirstShotPlan& plan, RadiosityState& state);
 // A point source ([[light]]): its radiant power is added to the emitted
 // energy and shot along `lines` lines from its position, drawn in
 // proportion to its intensity, each carrying an equal share of its power to
-// the face it meets first. Returns the lines shot.
+// the face it meets first. `halton`: line k's three numbers are point k of
+// the Halton sequence shifted by a random vector of the light's own (as an
+// emitting face's, EmitterPoints), so the lines spread over the candela
+// table evenly; else independent numbers. Returns the lines shot.
 uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const PointLight& light,
-                     long long lines, unsigned long long seed, int shards);
+                     long long lines, unsigned long long seed, int shards, bool halton);
 
 // Traces `plan` (its global faces left to the global lines). `accelerated`:
 // find nearest hits through the subscenes' associated patches

@@ -47,21 +47,25 @@ void in_blocks(uint64_t lines, unsigned long long seed, unsigned long long first
 }  // namespace
 
 Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, unsigned long long seed,
-                uint64_t lines, const Tracer* given) {
+                uint64_t lines, const Tracer* given, const std::vector<PointLight>& lights) {
   const size_t faces = mesh.face_count();
   auto mean = [](const Rgb& c) { return (c[0] + c[1] + c[2]) / 3.0; };
-  // Emitting faces and the power of each (W, mean of the channels).
+  // Emitting faces, then the point sources (-1 - light), and the power of
+  // each (W, mean of the channels; a light's is the same in every channel).
   std::vector<int> emitters;
   std::vector<double> cumulative;
   double total = 0;
-  for (size_t f = 0; f < faces; ++f) {
-    const Patch& p = mesh.patches[mesh.face_patch[f]];
-    const double power = std::numbers::pi * mean(scene.materials[p.material].emission) * p.area;
-    if (!(power > 0)) continue;
-    emitters.push_back(static_cast<int>(f));
+  const auto add = [&](int emitter, double power) {
+    if (!(power > 0)) return;
+    emitters.push_back(emitter);
     total += power;
     cumulative.push_back(total);
+  };
+  for (size_t f = 0; f < faces; ++f) {
+    const Patch& p = mesh.patches[mesh.face_patch[f]];
+    add(static_cast<int>(f), std::numbers::pi * mean(scene.materials[p.material].emission) * p.area);
   }
+  for (size_t l = 0; l < lights.size(); ++l) add(-1 - static_cast<int>(l), lights[l].power());
   if (emitters.empty() || lines == 0) return {};
   Pilot pilot;
   std::optional<Tracer> own;
@@ -79,11 +83,22 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
           const size_t e = std::min<size_t>(
               std::upper_bound(cumulative.begin(), cumulative.end(), u) - cumulative.begin(), emitters.size() - 1);
           const int face = emitters[e];
-          const int patch = mesh.face_patch[face];
-          const Vec3 org = uniform_point(mesh, mesh.patches[patch], rng);
-          const Vec3 dir = cosine_direction(mesh.face_normal(face), rng);
-          const NearestHit hit = tracer.nearest_from(patch, org, dir, tfar);
-          if (hit.patch < 0 || mesh.touching(patch, hit.patch)) continue;
+          NearestHit hit;
+          Vec3 dir;
+          if (face < 0) {  // a point source, as shoot_light draws its lines
+            const PointLight& light = lights[static_cast<size_t>(-1 - face)];
+            double u[3];
+            for (double& v : u) v = uniform(rng);
+            dir = light.sample(u[0], u[1], u[2]);
+            hit = tracer.nearest(light.options.position, dir, 0.0, tfar);
+            if (hit.patch < 0) continue;
+          } else {
+            const int patch = mesh.face_patch[face];
+            const Vec3 org = uniform_point(mesh, mesh.patches[patch], rng);
+            dir = cosine_direction(mesh.face_normal(face), rng);
+            hit = tracer.nearest_from(patch, org, dir, tfar);
+            if (hit.patch < 0 || mesh.touching(patch, hit.patch)) continue;
+          }
           const int met = mesh.face_met(hit.patch, dir);
           if (met < 0) continue;
           out.emplace_back(met, share * mean(scene.materials[mesh.patches[hit.patch].material].rho));

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "hierarchy.h"
+#include "luminaire.h"
 #include "mesh.h"
 #include "scene.h"
 #include "tracer.h"
@@ -40,11 +41,12 @@ struct Pilot {
 
 // Runs `lines` local and `lines` global lines of the scene's box (stream
 // `seed`); `h` (null: the root alone) numbers the boxes of box_weights;
-// `tracer`: the mesh's (null: one is built).
-// Empty when nothing in the scene emits. The same, bit for bit, on any
-// number of threads and in every shard.
+// `tracer`: the mesh's (null: one is built). The local lines leave the
+// emitting faces and the point sources `lights`, each in proportion to its
+// power. Empty when nothing in the scene emits. The same, bit for bit, on
+// any number of threads and in every shard.
 Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, unsigned long long seed,
-                uint64_t lines, const Tracer* tracer = nullptr);
+                uint64_t lines, const Tracer* tracer = nullptr, const std::vector<PointLight>& lights = {});
 
 // Pilot::box_weights of run_pilot.
 std::vector<double> pilot_weights(const Scene& scene, const PatchMesh& mesh, const Hierarchy& h,

@@ -89,14 +89,15 @@ std::unique_ptr<BoxStore> open_store(const Options& options, const PatchMesh& me
 // (pilot.h); a store made before stores recorded them, half of lines.total
 // as then.
 long long chosen_first_shot_lines(const Options& options, const Scene& scene, const PatchMesh& mesh,
-                                  const TracerOnDemand& tracer, const BoxStore* store, SolveRecord& record) {
+                                  const TracerOnDemand& tracer, const BoxStore* store,
+                                  const std::vector<PointLight>& lights, SolveRecord& record) {
   if (store) {
     record.shot_lines_from = "store";
     return static_cast<long long>(store->manifest().first_shot_lines);
   }
   const auto start = clock::now();
   const Pilot pilot = run_pilot(scene, mesh, nullptr, options.lines.seed,
-                                static_cast<uint64_t>(options.lines.pilot_lines()), &tracer.get());
+                                static_cast<uint64_t>(options.lines.pilot_lines()), &tracer.get(), lights);
   record.shot_lines_from = "pilot";
   record.shot_share = first_shot_share(pilot);
   record.pilot_seconds = seconds_since(start);
@@ -118,7 +119,7 @@ void start_state(const Options& run_options, const SolveFlags& flags, const Scen
   if (flags.resume) spdlog::warn("--resume: no checkpoint at {}; starting from the beginning", checkpoint.path.string());
   Options options = run_options;
   if (options.first_shot.lines == 0)
-    options.first_shot.chosen = chosen_first_shot_lines(options, scene, mesh, tracer, store, record);
+    options.first_shot.chosen = chosen_first_shot_lines(options, scene, mesh, tracer, store, lights, record);
   const RunFirstShot shot = plan_run_first_shot(options, mesh, state, store, lights);
   std::unique_ptr<SubsceneNearest> accelerated;
   if (options.first_shot.accelerate && store && store->box_count() > 1 && !store->line_sets())
@@ -140,7 +141,8 @@ void start_state(const Options& run_options, const SolveFlags& flags, const Scen
   }
   for (size_t l = 0; l < lights.size(); ++l) {
     const uint64_t shot_lines = shoot_light(mesh, tracer.get(), state, lights[l], shot.light_lines[l],
-                                            options.lines.seed + 7919 * (l + 1), options.solver.shards);
+                                            options.lines.seed + 7919 * (l + 1), options.solver.shards,
+                                            options.first_shot.sequence == "halton");
     record.shot.lines += shot_lines;
     record.lights[l].first_shot_lines = shot_lines;
   }

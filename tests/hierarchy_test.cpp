@@ -16,6 +16,7 @@
 #include "error.h"
 #include "first_shot.h"
 #include "hierarchy.h"
+#include "luminaire.h"
 #include "line_budget.h"
 #include "line_tracing.h"
 #include "pilot.h"
@@ -263,6 +264,41 @@ TEST(PilotFirstShot, ItsVarianceIsTheFirstShotsOwn) {
     EXPECT_GE(first_shot_share(pilot), 0.125);
     EXPECT_LE(first_shot_share(pilot), 4.0);
   }
+}
+
+// The same with a point source ([[light]]) beside the small lamp, of about
+// the lamp's power: the pilot's local lines leave both in proportion to
+// their power, and its figure is the spread of independent first shots that
+// share their lines the same way (the lamp's faces and the light's own).
+// Without the light the pilot's figure misses it by far.
+TEST(PilotFirstShot, ItWeighsThePointSourcesLinesToo) {
+  const Scene scene = lamp_room(0.5, true);
+  const PatchMesh mesh = build_mesh(scene, 0.05);
+  LightOptions o;
+  o.position = {4.5, 2.5, 2.2};
+  o.intensity_cd = 214.0;  // 15 W, as the lamp's 0.25 m2 at 20 W/sr/m2 (15.7 W)
+  const std::vector<PointLight> lights{make_light(o)};
+  const Pilot pilot = run_pilot(scene, mesh, nullptr, 1, 200'000, nullptr, lights);
+  const Pilot lamp_only = run_pilot(scene, mesh, nullptr, 1, 200'000);
+  ASSERT_GT(pilot.first_shot_variance, 0);
+  const Tracer tracer(mesh);
+  const long long lines = 20'000;
+  FaceSpread spread(mesh);
+  for (int seed = 1; seed <= 12; ++seed) {
+    RadiosityState state = make_state(scene, mesh);
+    const double lamp_power = state.emitted_total() / state.channels;
+    const auto light_lines = std::llround(lines * lights[0].power() / (lamp_power + lights[0].power()));
+    FirstShotPlan plan = plan_first_shot(mesh, state, lines - light_lines, {});
+    plan.halton = false;
+    first_shot(mesh, tracer, state, plan, static_cast<unsigned long long>(seed), 2);
+    shoot_light(mesh, tracer, state, lights[0], light_lines, static_cast<unsigned long long>(seed) + 100, 2, false);
+    spread.add(state);
+  }
+  const double measured = spread.area_weighted_variance();
+  std::printf("measured / pilot %.4f, measured / pilot of the lamp alone %.4f\n",
+              measured / (pilot.first_shot_variance / lines), measured / (lamp_only.first_shot_variance / lines));
+  EXPECT_NEAR(measured / (pilot.first_shot_variance / lines), 1.0, 0.1);
+  EXPECT_GT(measured / (lamp_only.first_shot_variance / lines), 2.0);  // 3.8 measured
 }
 
 // first_shot.sequence = "halton" against "random" (first_shot.h,

@@ -437,7 +437,8 @@ std::vector<ConfigKey> make_table() {
        "local lines",
        SET(o.first_shot.mode = get_choice(n, s, "mode", {"auto", "local"})), GET(o.first_shot.mode)},
       {"first_shot.sequence",
-       "`\"halton\"` (each emitting face's lines stratified by a randomised Halton sequence of its own) or "
+       "`\"halton\"` (each emitting face's and each `[[light]]`'s lines stratified by a randomised Halton sequence "
+       "of its own) or "
        "`\"random\"`; see algorithm.md",
        SET(o.first_shot.sequence = get_choice(n, s, "sequence", {"random", "halton"})), GET(o.first_shot.sequence)},
       {"solver.method",
