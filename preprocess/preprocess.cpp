@@ -276,7 +276,7 @@ PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& s
     std::vector<PointLight> lights;  // shot by every solve, but they light what the boxes hold
     for (const LightOptions& l : options.scene.lights) lights.push_back(make_light(l));
     const Pilot p = run_pilot(prepared.scene, mesh, &hierarchy, options.lines.seed, static_cast<uint64_t>(lines),
-                              nullptr, lights);
+                              options.first_shot.sequence == "halton", nullptr, lights);
     if (boxes_need_pilot) pilot = p.box_weights;
     stats.pilot_seconds = seconds(clock::now() - t);
     stats.pilot_lines = static_cast<uint64_t>(lines);

@@ -26,25 +26,10 @@ double face_power(const RadiosityState& s, int f) {
   return p;
 }
 
-// Lines per emitting face, proportional to its power, at least one each; the
-// counts are cumulative roundings so they add up to the budget (plus the minimums).
 std::vector<uint64_t> allocate_lines(const RadiosityState& s, long long budget, const std::vector<int>& emitters) {
   std::vector<double> power;
-  double total = 0;
-  for (int f : emitters) {
-    power.push_back(face_power(s, f));
-    total += power.back();
-  }
-  std::vector<uint64_t> counts(emitters.size());
-  double cumulative = 0;
-  uint64_t assigned = 0;
-  for (size_t i = 0; i < emitters.size(); ++i) {
-    cumulative += power[i];
-    const auto upto = static_cast<uint64_t>(std::llround(static_cast<double>(budget) * cumulative / total));
-    counts[i] = std::max<uint64_t>(1, upto > assigned ? upto - assigned : 0);
-    assigned = std::max(assigned, upto);
-  }
-  return counts;
+  for (int f : emitters) power.push_back(face_power(s, f));
+  return lines_by_power(power, budget);
 }
 
 }  // namespace
@@ -52,6 +37,21 @@ std::vector<uint64_t> allocate_lines(const RadiosityState& s, long long budget, 
 std::vector<double> emitter_crossings(const Options& options, std::vector<double> crossings) {
   if (options.first_shot.mode != "auto") return {};
   return crossings;
+}
+
+std::vector<uint64_t> lines_by_power(const std::vector<double>& power, long long budget) {
+  double total = 0;
+  for (double p : power) total += p;
+  std::vector<uint64_t> counts(power.size());
+  double cumulative = 0;
+  uint64_t assigned = 0;
+  for (size_t i = 0; i < power.size(); ++i) {
+    cumulative += power[i];
+    const auto upto = static_cast<uint64_t>(std::llround(static_cast<double>(budget) * cumulative / total));
+    counts[i] = std::max<uint64_t>(1, upto > assigned ? upto - assigned : 0);
+    assigned = std::max(assigned, upto);
+  }
+  return counts;
 }
 
 Rng first_shot_rng(unsigned long long seed, uint64_t block) { return make_rng(seed, kFirstShotStream, block); }

@@ -141,6 +141,11 @@ inline constexpr uint64_t kFirstShotBlock = 4096;
 inline uint64_t FirstShotPlan::blocks() const { return (lines() + kFirstShotBlock - 1) / kFirstShotBlock; }
 Rng first_shot_rng(unsigned long long seed, uint64_t block);
 
+// Lines per emitter, proportional to its power `power[e]`, at least one
+// each: cumulative roundings, so that they add up to `budget` (plus the
+// minimums).
+std::vector<uint64_t> lines_by_power(const std::vector<double>& power, long long budget);
+
 // The points of emitter e's lines with first_shot.sequence = "halton": its
 // j-th line takes the j-th point of the Halton sequence in bases 2, 3, 5 and
 // 7, shifted modulo 1 by a random vector of e's own (a Cranley-Patterson

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "box_geometry.h"
+#include "first_shot.h"
 #include "line_order.h"
 #include "sampling.h"
 #include "tracer.h"
@@ -23,13 +24,18 @@ constexpr unsigned kPilotStream = 12;
 // it finds in a list, and the lists are summed in block order, so that the
 // weights are the same, bit for bit, on any number of threads.
 constexpr uint64_t kPilotBlock = 4096;
+// Stratified first shots: replicas, and the fewest lines an emitter shoots
+// in each for its points to be worth stratifying.
+constexpr uint64_t kPilotReplicas = 8;
+constexpr uint64_t kStratifiedLines = 4;
+constexpr unsigned long long kShiftIndex = 1ULL << 40;  // the replicas' shifts: past the blocks' streams
 
 uint64_t block_count(uint64_t lines) { return (lines + kPilotBlock - 1) / kPilotBlock; }
 
 // Runs `lines` lines in blocks of kPilotBlock on the threads there are:
-// work(n, rng, out) runs n lines with the block's own stream and appends
-// what they find to `out`; then add(pair) takes every block's pairs, in
-// block order. The lists hold a pair per crossing of the pilot's lines
+// work(first, n, rng, out) runs lines [first, first + n) with the block's
+// own stream and appends what they find to `out`; then add(pair) takes
+// every block's pairs, in block order. The lists hold a pair per crossing of the pilot's lines
 // (about 10 MB for 200,000 lines on OFFICE).
 template <typename Pair, typename Work, typename Add>
 void in_blocks(uint64_t lines, unsigned long long seed, unsigned long long first_stream, const Work& work,
@@ -39,7 +45,7 @@ void in_blocks(uint64_t lines, unsigned long long seed, unsigned long long first
   tbb::parallel_for(uint64_t{0}, blocks, [&](uint64_t b) {
     Rng rng = make_rng(seed, kPilotStream, first_stream + b);
     const uint64_t n = std::min(kPilotBlock, lines - b * kPilotBlock);
-    work(n, rng, found[b]);
+    work(b * kPilotBlock, n, rng, found[b]);
   });
   for (const std::vector<Pair>& block : found)
     for (const Pair& p : block) add(p);
@@ -47,7 +53,7 @@ void in_blocks(uint64_t lines, unsigned long long seed, unsigned long long first
 }  // namespace
 
 Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, unsigned long long seed,
-                uint64_t lines, const Tracer* given, const std::vector<PointLight>& lights) {
+                uint64_t lines, bool stratified, const Tracer* given, const std::vector<PointLight>& lights) {
   const size_t faces = mesh.face_count();
   auto mean = [](const Rgb& c) { return (c[0] + c[1] + c[2]) / 3.0; };
   // Emitting faces, then the point sources (-1 - light), and the power of
@@ -72,39 +78,107 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
   const Tracer& tracer = given ? *given : own.emplace(mesh);
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   const double share = total / static_cast<double>(lines);
+  const auto rho_of = [&](int f) { return mean(scene.materials[mesh.patches[mesh.face_patch[f]].material].rho); };
+  // The face a local line of emitter `emitter` (a face, or -1 - light) meets
+  // first, or -1.
+  const auto met_from = [&](int emitter, const Vec3& org, const Vec3& dir) {
+    const NearestHit hit =
+        emitter < 0 ? tracer.nearest(org, dir, 0.0, tfar) : tracer.nearest_from(mesh.face_patch[emitter], org, dir, tfar);
+    if (hit.patch < 0 || (emitter >= 0 && mesh.touching(mesh.face_patch[emitter], hit.patch))) return -1;
+    return mesh.face_met(hit.patch, dir);
+  };
   // Streams: the local lines' blocks first, then the global lines'.
   const unsigned long long global_streams = block_count(lines);
   std::vector<double> reflected(faces, 0.0);  // W
-  in_blocks<std::pair<int, double>>(
-      lines, seed, 0,
-      [&](uint64_t n, Rng& rng, std::vector<std::pair<int, double>>& out) {
-        for (uint64_t k = 0; k < n; ++k) {
-          const double u = uniform(rng) * total;
-          const size_t e = std::min<size_t>(
-              std::upper_bound(cumulative.begin(), cumulative.end(), u) - cumulative.begin(), emitters.size() - 1);
-          const int face = emitters[e];
-          NearestHit hit;
-          Vec3 dir;
-          if (face < 0) {  // a point source, as shoot_light draws its lines
-            const PointLight& light = lights[static_cast<size_t>(-1 - face)];
-            double u[3];
-            for (double& v : u) v = uniform(rng);
-            dir = light.sample(u[0], u[1], u[2]);
-            hit = tracer.nearest(light.options.position, dir, 0.0, tfar);
-            if (hit.patch < 0) continue;
-          } else {
-            const int patch = mesh.face_patch[face];
-            const Vec3 org = uniform_point(mesh, mesh.patches[patch], rng);
-            dir = cosine_direction(mesh.face_normal(face), rng);
-            hit = tracer.nearest_from(patch, org, dir, tfar);
-            if (hit.patch < 0 || mesh.touching(patch, hit.patch)) continue;
+  // Lines per emitter in a replica of a stratified first shot.
+  std::vector<double> powers(emitters.size());
+  for (size_t e = 0; e < emitters.size(); ++e) powers[e] = cumulative[e] - (e > 0 ? cumulative[e - 1] : 0.0);
+  const uint64_t per_replica = std::max<uint64_t>(1, lines / kPilotReplicas);
+  if (stratified && per_replica >= kStratifiedLines * emitters.size()) {
+    // As the first shot shoots them (first_shot.sequence = "halton"): each
+    // emitter its lines by power, on the Halton points of a shift of its
+    // own; kPilotReplicas such shots of lines / kPilotReplicas lines with
+    // independent shifts. Each gives every face its reflected power; their
+    // mean is the face's, their spread the variance of such a shot.
+    const std::vector<uint64_t> counts = lines_by_power(powers, static_cast<long long>(per_replica));
+    std::vector<uint64_t> first{0};
+    for (uint64_t n : counts) first.push_back(first.back() + n);
+    const uint64_t m = first.back();
+    std::vector<double> replica(kPilotReplicas * faces, 0.0);
+    in_blocks<std::pair<uint64_t, double>>(
+        kPilotReplicas * m, seed, 0,
+        [&](uint64_t from, uint64_t n, Rng&, std::vector<std::pair<uint64_t, double>>& out) {
+          uint64_t shifted = ~uint64_t{0};  // the replica and emitter `shift` is of
+          double shift[4], u[4];
+          for (uint64_t i = from; i < from + n; ++i) {
+            const uint64_t r = i / m, j = i % m;
+            const size_t e = static_cast<size_t>(std::upper_bound(first.begin(), first.end(), j) - first.begin() - 1);
+            if (r * emitters.size() + e != shifted) {
+              shifted = r * emitters.size() + e;
+              Rng rng = make_rng(seed, kPilotStream, kShiftIndex + shifted);
+              for (double& v : shift) v = uniform(rng);
+            }
+            shifted_halton(j - first[e], shift, u);
+            const int emitter = emitters[e];
+            Vec3 org, dir;
+            if (emitter < 0) {
+              const PointLight& light = lights[static_cast<size_t>(-1 - emitter)];
+              org = light.options.position;
+              dir = light.sample(u[0], u[1], u[2]);
+            } else {
+              org = uniform_point(mesh, mesh.patches[mesh.face_patch[emitter]], u[0], u[1]);
+              dir = cosine_direction(mesh.face_normal(emitter), u[2], u[3]);
+            }
+            const int met = met_from(emitter, org, dir);
+            if (met < 0) continue;
+            out.emplace_back(r * faces + static_cast<uint64_t>(met),
+                             powers[e] / static_cast<double>(counts[e]) * rho_of(met));
           }
-          const int met = mesh.face_met(hit.patch, dir);
-          if (met < 0) continue;
-          out.emplace_back(met, share * mean(scene.materials[mesh.patches[hit.patch].material].rho));
-        }
-      },
-      [&](const std::pair<int, double>& p) { reflected[static_cast<size_t>(p.first)] += p.second; });
+        },
+        [&](const std::pair<uint64_t, double>& p) { replica[p.first] += p.second; });
+    for (size_t f = 0; f < faces; ++f) {
+      double sum = 0, square = 0;
+      for (uint64_t r = 0; r < kPilotReplicas; ++r) sum += replica[r * faces + f];
+      reflected[f] = sum / kPilotReplicas;
+      for (uint64_t r = 0; r < kPilotReplicas; ++r) square += std::pow(replica[r * faces + f] - reflected[f], 2);
+      // A replica's variance of the radiosity, in area x radiosity^2.
+      pilot.first_shot_variance += square / (kPilotReplicas - 1) / mesh.patches[mesh.face_patch[f]].area;
+    }
+    pilot.first_shot_variance *= static_cast<double>(m);
+    pilot.first_shot_stratified = true;
+  } else {
+    in_blocks<std::pair<int, double>>(
+        lines, seed, 0,
+        [&](uint64_t, uint64_t n, Rng& rng, std::vector<std::pair<int, double>>& out) {
+          for (uint64_t k = 0; k < n; ++k) {
+            const double u = uniform(rng) * total;
+            const size_t e = std::min<size_t>(
+                std::upper_bound(cumulative.begin(), cumulative.end(), u) - cumulative.begin(), emitters.size() - 1);
+            const int emitter = emitters[e];
+            Vec3 org, dir;
+            if (emitter < 0) {  // a point source, as shoot_light draws its lines
+              const PointLight& light = lights[static_cast<size_t>(-1 - emitter)];
+              double v[3];
+              for (double& x : v) x = uniform(rng);
+              org = light.options.position;
+              dir = light.sample(v[0], v[1], v[2]);
+            } else {
+              org = uniform_point(mesh, mesh.patches[mesh.face_patch[emitter]], rng);
+              dir = cosine_direction(mesh.face_normal(emitter), rng);
+            }
+            const int met = met_from(emitter, org, dir);
+            if (met < 0) continue;
+            out.emplace_back(met, share * rho_of(met));
+          }
+        },
+        [&](const std::pair<int, double>& p) { reflected[static_cast<size_t>(p.first)] += p.second; });
+    // A local line brings a face the reflected power share * rho, so a
+    // face's reflected power, a sum of such, has the variance share * rho *
+    // its mean: in area x radiosity^2, share * rho * reflected / area.
+    for (size_t f = 0; f < faces; ++f)
+      pilot.first_shot_variance += share * rho_of(static_cast<int>(f)) * reflected[f] / mesh.patches[mesh.face_patch[f]].area;
+    pilot.first_shot_variance *= static_cast<double>(lines);
+  }
   // What the global lines will carry: a face's estimate from its crossings
   // averages the radiosity of the faces it sees along them, so its variance
   // goes as rho^2 times the mean square of that radiosity over its
@@ -116,7 +190,7 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
   const BoxLineSampler sampler(line_box(mesh.bounds));  // the root box's, where there is a hierarchy
   in_blocks<std::pair<int, int>>(
       lines, seed, global_streams,
-      [&](uint64_t n, Rng& rng, std::vector<std::pair<int, int>>& out) {
+      [&](uint64_t, uint64_t n, Rng& rng, std::vector<std::pair<int, int>>& out) {
         std::vector<LineHit> hits;
         for (uint64_t k = 0; k < n; ++k) {
           const GlobalLine line = sampler.sample(rng);
@@ -160,10 +234,6 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
     const int patch = mesh.face_patch[f];
     const double area = mesh.patches[patch].area;
     const double rho = mean(scene.materials[mesh.patches[patch].material].rho);
-    // A local line brings a face the reflected power share * rho, so a face's
-    // reflected power, a sum of such, has the variance share * rho * its
-    // mean: in area x radiosity^2, share * rho * reflected / area.
-    pilot.first_shot_variance += share * rho * reflected[f] / area;
     area_sum += area;
     total_crossings += crossings[f];
     if (!(crossings[f] > 0)) continue;
@@ -187,7 +257,6 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
     pilot.global_mean_square /= per_area;
   }
   // Per line: the variances fall as one over the lines.
-  pilot.first_shot_variance *= static_cast<double>(lines);
   pilot.global_variance *= static_cast<double>(lines);
   pilot.global_mean_square *= static_cast<double>(lines);
   pilot.hits_per_line = line_hits / static_cast<double>(lines);
@@ -196,7 +265,7 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
 
 std::vector<double> pilot_weights(const Scene& scene, const PatchMesh& mesh, const Hierarchy& h,
                                   unsigned long long seed, uint64_t lines) {
-  return run_pilot(scene, mesh, &h, seed, lines).box_weights;
+  return run_pilot(scene, mesh, &h, seed, lines, true).box_weights;
 }
 
 double first_shot_share(const Pilot& pilot) {

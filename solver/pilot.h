@@ -26,6 +26,10 @@ struct Pilot {
   // the global lines carry from it (per global line of the scene's box).
   double first_shot_variance = 0;
   double global_variance = 0;
+  // Whether first_shot_variance is that of stratified first shots
+  // (first_shot.sequence = "halton"), measured over replicas, or of
+  // independent lines.
+  bool first_shot_stratified = false;
   // global_variance with each face's mean square of the radiosity it sees in
   // place of its variance: what the global lines' first bounce would add if
   // a face's crossing count varied as a Poisson count does. A pass's counts
@@ -39,16 +43,22 @@ struct Pilot {
   bool empty() const { return box_weights.empty(); }
 };
 
-// Runs `lines` local and `lines` global lines of the scene's box (stream
-// `seed`); `h` (null: the root alone) numbers the boxes of box_weights;
-// `tracer`: the mesh's (null: one is built). The local lines leave the
-// emitting faces and the point sources `lights`, each in proportion to its
-// power. Empty when nothing in the scene emits. The same, bit for bit, on
-// any number of threads and in every shard.
+// Runs about `lines` local and `lines` global lines of the scene's box
+// (stream `seed`); `h` (null: the root alone) numbers the boxes of
+// box_weights; `tracer`: the mesh's (null: one is built). The local lines
+// leave the emitting faces and the point sources `lights`, each in
+// proportion to its power: `stratified` (first_shot.sequence = "halton"),
+// as the first shot does, in 8 replicas of an eighth of the lines each with
+// Halton points shifted anew, whose spread is the first shot's variance
+// (where every emitter has 4 lines a replica or more; else, and without
+// `stratified`, independent lines and their Poisson variance). Empty when
+// nothing in the scene emits. The same, bit for bit, on any number of
+// threads and in every shard.
 Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, unsigned long long seed,
-                uint64_t lines, const Tracer* tracer = nullptr, const std::vector<PointLight>& lights = {});
+                uint64_t lines, bool stratified, const Tracer* tracer = nullptr,
+                const std::vector<PointLight>& lights = {});
 
-// Pilot::box_weights of run_pilot.
+// Pilot::box_weights of run_pilot (stratified).
 std::vector<double> pilot_weights(const Scene& scene, const PatchMesh& mesh, const Hierarchy& h,
                                   unsigned long long seed, uint64_t lines);
 

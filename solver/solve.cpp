@@ -97,7 +97,8 @@ long long chosen_first_shot_lines(const Options& options, const Scene& scene, co
   }
   const auto start = clock::now();
   const Pilot pilot = run_pilot(scene, mesh, nullptr, options.lines.seed,
-                                static_cast<uint64_t>(options.lines.pilot_lines()), &tracer.get(), lights);
+                                static_cast<uint64_t>(options.lines.pilot_lines()),
+                                options.first_shot.sequence == "halton", &tracer.get(), lights);
   record.shot_lines_from = "pilot";
   record.shot_share = first_shot_share(pilot);
   record.pilot_seconds = seconds_since(start);

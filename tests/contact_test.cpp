@@ -164,7 +164,9 @@ double frame_back_radiosity(bool split, double max_patch_area, bool contacts = t
   Scene s;
   const int grey = lit_room(s);
   test::add_box(s, {0, 1.3, 1.1}, {0.04, 2.1, 1.7}, false, grey, test::add_object(s, "frame"));
-  if (split) EXPECT_EQ(split_contacts(s).pairs, 1u);
+  if (split) {
+    EXPECT_EQ(split_contacts(s).pairs, 1u);
+  }
   Options o = test::test_options(400'000, 200'000, max_patch_area);
   o.solver.iterations = 30;
   o.solver.tolerance = 1e-4;

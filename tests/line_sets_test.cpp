@@ -203,7 +203,9 @@ TEST(LineSets, StoredClassCountsAreThoseOfTheStoredLines) {
       EXPECT_EQ(box.counts.class_crossings, expected) << "box " << x;
     }
     EXPECT_GT(counted, 1'000'000u);
-    if (scene == mgf) EXPECT_GT(passed_behind, 10'000u) << "the MGF furnace's lines pass invisible backs";
+    if (scene == mgf) {
+      EXPECT_GT(passed_behind, 10'000u) << "the MGF furnace's lines pass invisible backs";
+    }
   }
 }
 

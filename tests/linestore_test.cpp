@@ -265,7 +265,9 @@ TEST(LineStore, DecodingIntoPassOrderEqualsDecodingAndGathering) {
     EXPECT_FALSE(decode_chunk_lines(data, raw.size(), lines.size(), events, order.data(), 1, place, direct));
     EXPECT_FALSE(decode_chunk_lines(data, raw.size(), lines.size(), events + 1, identity.data(), 1, place, direct));
     EXPECT_FALSE(decode_chunk(data, raw.size(), lines.size(), events + 1, whole));
-    if (events > 0) EXPECT_FALSE(decode_chunk(data, raw.size(), lines.size(), events - 1, whole));
+    if (events > 0) {
+      EXPECT_FALSE(decode_chunk(data, raw.size(), lines.size(), events - 1, whole));
+    }
     for (size_t cut = 0; cut < raw.size(); cut += 1 + raw.size() / 97) {
       EXPECT_FALSE(decode_chunk(data, cut, lines.size(), events, whole)) << "cut at " << cut;
       EXPECT_FALSE(decode_chunk_lines(data, cut, lines.size(), events, identity.data(), lines.size(), place, direct))

@@ -34,7 +34,9 @@ TEST(Sampling, RadicalInverseMirrorsDigits) {
     for (uint64_t i : {0ull, 1ull, 2186ull, 2187ull, 12345ull, 4'000'000ull, 4'294'967'295ull, (1ull << 40) + 977ull}) {
       double f = 1.0 / base, expected = 0;
       for (uint64_t k = i; k > 0; k /= base, f /= base) expected += f * static_cast<double>(k % base);
-      if (base == 2) EXPECT_DOUBLE_EQ(radical_inverse(i, base), expected) << i;
+      if (base == 2) {
+        EXPECT_DOUBLE_EQ(radical_inverse(i, base), expected) << i;
+      }
       else EXPECT_NEAR(radical_inverse(i, base), expected, 1e-15) << base << " " << i;
     }
 }

@@ -203,7 +203,9 @@ TEST(StoredShot, ADamagedFileIsAnErrorNamingIt) {
     state = s.state;
     FirstShotStats stats;
     const std::string why = message_of([&] { replay_stored_shot(path, s.mesh, plan, 1, state, stats); });
-    if (!why.empty()) EXPECT_EQ(state.phi, s.state.phi) << "the state is left as it was";
+    if (!why.empty()) {
+      EXPECT_EQ(state.phi, s.state.phi) << "the state is left as it was";
+    }
     return why;
   };
   EXPECT_EQ(read(good), "");
