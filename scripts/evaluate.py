@@ -910,6 +910,18 @@ from this run's CSVs; what follows explains them, from the profiles in
   2.59 %). Since both sides gain alike, the speed-ups at equal error move
   within the runs' noise, and a little down where the hierarchical solve
   is mostly fixed costs (soda's kept store).
+- **The pilot measures the stratified first shot** (since 0a89dc3;
+  docs/algorithm.md, "First-shot share"). Its first-shot variance comes
+  from replicas of Halton shots, as the first shot runs, instead of the
+  random points' formula, so the first shot gets 5-37 % fewer lines
+  (at 2M lines office3 1.28 -> 0.93 of `lines.total`, BIG ROOM 0.30 ->
+  0.19, office2 0.72 -> 0.64, soda 1.78 -> 1.70). The errors at equal lines moved by at
+  most 3 % either way (office3 hierarchical 2.79 -> 2.84 % at 1M, 1.19 ->
+  1.23 % at 8M; soda 7.65 -> 7.70 % at 1M), for shorter runs on both
+  sides; the speed-ups moved within the runs' noise (first runs ROOM
+  2.06 -> 1.96x, BIG ROOM 1.55 -> 1.56x, OFFICE 3.70 -> 3.93x, office2
+  1.50 -> 1.57x, office3 3.92 -> 3.58x, soda 1.38 -> 1.45x, against the
+  evaluation at e4a6ef8).
 - **Where the error lies.** The table under each scene splits each
   method's squared error by box. Wherever the hierarchy gives a small
   bright box lines of its own (a lamp in its shade: ROOM's, BIG ROOM's,
@@ -948,24 +960,22 @@ from this run's CSVs; what follows explains them, from the profiles in
   of the error ratio at equal lines, less what it costs beyond a classic
   solve of the same lines.
 
-  BIG ROOM's table shows why that ratio stays at 0.71-0.78:
-  - 61 % of classic's squared error is inside the ceiling lamp's shade, and
-    the lamp's box (10 % of the lines) cuts it to 0.22 of classic's (0.12
-    in the run before, whose first shot had half of `lines.total`, not a
-    third).
-  - The other 39 % is in the walls, the floor and the furniture groups.
+  BIG ROOM's table shows why that ratio stays at 0.69-0.75:
+  - 57 % of classic's squared error is inside the ceiling lamp's shade, and
+    the lamp's box (10 % of the lines) cuts it to 0.11 of classic's.
+  - The other 43 % is in the walls, the floor and the furniture groups.
     Only the root's lines (90 %) carry it, and there the hierarchical error
-    equals classic's (1.00-1.10 of it box by box).
+    equals classic's (1.00-1.09 of it box by box).
   - With no error left in the lamp at all, the squared error would still be
-    0.39 of classic's. That bounds the first run near 2.5x before the
-    preprocess's own costs, which is the target.
+    0.43 of classic's. That bounds the first run near 2.3x before the
+    preprocess's own costs, below the 2.5x target.
   - What is left is a cheaper line: the preprocess would have to trace,
     count, encode and compress a line for clearly less than a classic pass
     traces and transports one.
-- **office2's first run:** 1.50x here, at the 1.5x target (1.64x in the
-  evaluation just before this one, 1.77x at d650bc8; 1.45-1.60x in the five
-  evaluations before d650bc8, with the first shot at half of
-  `lines.total`; the pilot gives it 0.7 now).
+- **office2's first run:** 1.57x here, above the 1.5x target (1.50x and
+  1.64x in the two evaluations just before this one, 1.77x at d650bc8;
+  1.45-1.60x in the five evaluations before d650bc8, with the first shot at
+  half of `lines.total`; the pilot gives it 0.64 now).
   - Half of classic's squared error is in the room's walls, ceiling and
     desks (the root), and a quarter more in two wall slabs that get few or no
     lines of their own. The hierarchical runs err there as classic does.
@@ -978,9 +988,10 @@ from this run's CSVs; what follows explains them, from the profiles in
   store (`first_shot.bin`, traced once by `mpath-preprocess`), so it is
   the transport loop over the stored lines and little else, while classic
   traces its first shot on every solve. soda's kept-store solve, the
-  slowest against classic (4.98x here, 4.85x in the evaluation just before
-  this one, 5.24x at d650bc8; 4.14-5.14x before that, when its first shot
-  had half the lines), is the shortest of all: since the first shot is
+  slowest against classic (4.80x here, 4.98x and 4.85x in the two
+  evaluations just before this one, 5.24x at d650bc8; 4.14-5.14x before
+  that, when its first shot had half the lines; 5.75x here in CPU
+  seconds), is the shortest of all: since the first shot is
   stratified (below) classic's errors fall as much as the hierarchy's, so
   classic needs fewer lines for the same error while the kept-store solve's
   fixed second (loading, opening the store, the outputs) stays; these

@@ -35,8 +35,8 @@ uint64_t block_count(uint64_t lines) { return (lines + kPilotBlock - 1) / kPilot
 // Runs `lines` lines in blocks of kPilotBlock on the threads there are:
 // work(first, n, rng, out) runs lines [first, first + n) with the block's
 // own stream and appends what they find to `out`; then add(pair) takes
-// every block's pairs, in block order. The lists hold a pair per crossing of the pilot's lines
-// (about 10 MB for 200,000 lines on OFFICE).
+// every block's pairs, in block order. The lists hold a pair per crossing
+// of the pilot's lines (about 10 MB for 200,000 lines on OFFICE).
 template <typename Pair, typename Work, typename Add>
 void in_blocks(uint64_t lines, unsigned long long seed, unsigned long long first_stream, const Work& work,
                const Add& add) {

@@ -425,8 +425,8 @@ std::vector<ConfigKey> make_table() {
        GET(static_cast<int64_t>(o.lines.seed))},
       {"lines.sequence", "`\"halton\"` (randomised Halton) or `\"random\"` global lines; see algorithm.md",
        SET(o.lines.sequence = get_choice(n, s, "sequence", {"random", "halton"})), GET(o.lines.sequence)},
-      {"first_shot.lines", "local lines of the first shot, shared among emitting faces by power; 0: a pilot sets them "
-                           "(1/8 to 4 times lines.total, by where the error lies)",
+      {"first_shot.lines", "local lines of the first shot, shared among the emitting faces and the `[[light]]`s by "
+                           "power; 0: a pilot sets them (1/8 to 4 times lines.total, by where the error lies)",
        SET(o.first_shot.lines = zero_or_at_most(get_integer(n, s), kMaxLines, s)), GET(static_cast<int64_t>(o.first_shot.lines))},
       {"first_shot.accelerate",
        "hierarchical method: local lines entering a subscene are tested against the AR's associated patches first "
