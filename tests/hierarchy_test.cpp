@@ -228,6 +228,22 @@ class FaceSpread {
   int n_ = 0;
 };
 
+// The area-weighted variance of the reflected radiosity over 12 first
+// shots of `lines` local lines (seeds 1 to 12), with stratified or
+// independent points.
+double first_shot_spread(const Scene& scene, const PatchMesh& mesh, const Tracer& tracer, long long lines,
+                         bool halton) {
+  FaceSpread spread(mesh);
+  for (int seed = 1; seed <= 12; ++seed) {
+    RadiosityState state = make_state(scene, mesh);
+    FirstShotPlan plan = plan_first_shot(mesh, state, lines, {});
+    plan.halton = halton;
+    first_shot(mesh, tracer, state, plan, static_cast<unsigned long long>(seed), 2);
+    spread.add(state);
+  }
+  return spread.area_weighted_variance();
+}
+
 // The pilot's first-shot variance (pilot.h) against the first shot itself:
 // the area-weighted variance of the reflected radiosity that independent
 // first shots of `lines` local lines give (first_shot.sequence = "random"),
@@ -246,15 +262,7 @@ TEST(PilotFirstShot, ItsVarianceIsTheFirstShotsOwn) {
     EXPECT_GT(pilot.hits_per_line, 1.0);
     const Tracer tracer(mesh);
     const long long lines = 20'000;
-    FaceSpread spread(mesh);
-    for (int seed = 1; seed <= 12; ++seed) {
-      RadiosityState state = make_state(scene, mesh);
-      FirstShotPlan plan = plan_first_shot(mesh, state, lines, {});
-      plan.halton = false;
-      first_shot(mesh, tracer, state, plan, static_cast<unsigned long long>(seed), 2);
-      spread.add(state);
-    }
-    const double measured = spread.area_weighted_variance();
+    const double measured = first_shot_spread(scene, mesh, tracer, lines, false);
     const double model = pilot.first_shot_variance / static_cast<double>(lines);
     // Thousands of faces each add a variance estimated from 12 samples (a
     // relative spread of sqrt(2/11) each), so the sum is good to a few per
@@ -361,15 +369,7 @@ TEST(PilotFirstShot, ItsStratifiedVarianceIsTheHaltonShotsOwn) {
     const Tracer tracer(mesh);
     const char* what = small_lamp ? "small lamp" : "glowing ceiling";
     for (const long long lines : {25'000LL, 100'000LL}) {
-      FaceSpread spread(mesh);
-      for (int seed = 1; seed <= 12; ++seed) {
-        RadiosityState state = make_state(scene, mesh);
-        FirstShotPlan plan = plan_first_shot(mesh, state, lines, {});
-        plan.halton = true;
-        first_shot(mesh, tracer, state, plan, static_cast<unsigned long long>(seed), 2);
-        spread.add(state);
-      }
-      const double measured = spread.area_weighted_variance();
+      const double measured = first_shot_spread(scene, mesh, tracer, lines, true);
       std::printf("%s, %lld lines: measured / stratified pilot %.4f, / independent pilot %.4f\n", what, lines,
                   measured / (pilot.first_shot_variance / lines), measured / (independent.first_shot_variance / lines));
       if (lines == 25'000) {

@@ -95,14 +95,20 @@ TEST(Luminaire, ReadsSymmetriesTiltAndThePublishedLedaliteFile) {
   }
 }
 
+// The cube [-1, 1]^3 seen from inside, grey (rho 0.5), a polygon a face.
+Scene closed_cube() {
+  Scene scene;
+  const int grey = test::add_material(scene, "wall", 0.5, 0.0);
+  test::add_box(scene, {-1, -1, -1}, {1, 1, 1}, true, grey, test::add_object(scene, "room"));
+  return scene;
+}
+
 // A closed cube, its faces one polygon each, an isotropic light at its
 // centre: the first shot sends a sixth of the light's power to each face
 // (within 4 sigma of the binomial count of lines), and every watt is
 // accounted for.
 TEST(Luminaire, FirstShotSpreadsTheLightsPowerByItsIntensity) {
-  Scene scene;
-  const int grey = test::add_material(scene, "wall", 0.5, 0.0);
-  test::add_box(scene, {-1, -1, -1}, {1, 1, 1}, true, grey, test::add_object(scene, "room"));
+  const Scene scene = closed_cube();
   const PatchMesh mesh = build_mesh(scene, 100.0);
   ASSERT_EQ(mesh.face_count(), 6u);
   RadiosityState state = make_state(scene, mesh);
@@ -130,9 +136,7 @@ TEST(Luminaire, FirstShotSpreadsTheLightsPowerByItsIntensity) {
 // within 5 of their own standard errors, and vary far less from seed to seed
 // than independent lines, whose spread is the binomial one.
 TEST(Luminaire, StratifiedLightLinesAreUnbiasedAndSpreadLess) {
-  Scene scene;
-  const int grey = test::add_material(scene, "wall", 0.5, 0.0);
-  test::add_box(scene, {-1, -1, -1}, {1, 1, 1}, true, grey, test::add_object(scene, "room"));
+  const Scene scene = closed_cube();
   const PatchMesh mesh = build_mesh(scene, 100.0);
   ASSERT_EQ(mesh.face_count(), 6u);
   const Tracer tracer(mesh);
