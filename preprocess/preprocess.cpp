@@ -273,10 +273,9 @@ PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& s
   if (boxes_need_pilot || shot_needs_pilot) {
     t = clock::now();
     const long long lines = options.lines.pilot_lines();
-    std::vector<PointLight> lights;  // shot by every solve, but they light what the boxes hold
-    for (const LightOptions& l : options.scene.lights) lights.push_back(make_light(l));
+    // The lights are shot by every solve, but what they light is in the boxes.
     const Pilot p = run_pilot(prepared.scene, mesh, &hierarchy, options.lines.seed, static_cast<uint64_t>(lines),
-                              options.first_shot.sequence == "halton", nullptr, lights);
+                              options.first_shot.halton(), nullptr, make_lights(options.scene.lights));
     if (boxes_need_pilot) pilot = p.box_weights;
     stats.pilot_seconds = seconds(clock::now() - t);
     stats.pilot_lines = static_cast<uint64_t>(lines);

@@ -56,12 +56,8 @@ std::vector<uint64_t> lines_by_power(const std::vector<double>& power, long long
 
 Rng first_shot_rng(unsigned long long seed, uint64_t block) { return make_rng(seed, kFirstShotStream, block); }
 
-EmitterPoints::EmitterPoints(unsigned long long seed, size_t emitter) : emitter_(emitter) {
-  Rng rng = make_rng(seed, kEmitterShiftStream, emitter);
-  for (double& s : shift_) s = uniform(rng);
-}
-
-void EmitterPoints::point(uint64_t index, double u[4]) const { shifted_halton(index, shift_, u); }
+EmitterPoints::EmitterPoints(unsigned long long seed, size_t emitter)
+    : emitter_(emitter), points_(make_rng(seed, kEmitterShiftStream, emitter)) {}
 
 FirstShotPlan plan_first_shot(const PatchMesh& mesh, const RadiosityState& state, long long budget,
                               const std::vector<double>& global_crossings) {
@@ -115,7 +111,7 @@ RunFirstShot plan_run_first_shot(const Options& options, const PatchMesh& mesh, 
   RunFirstShot run;
   run.plan = plan_first_shot(mesh, state, lights.empty() ? first_shot_lines(options) : share(faces_power),
                              emitter_crossings(options, std::move(crossings)));
-  run.plan.halton = options.first_shot.sequence == "halton";
+  run.plan.halton = options.first_shot.halton();
   for (const PointLight& l : lights) run.light_lines.push_back(std::max<long long>(10'000, share(l.power() * state.channels)));
   return run;
 }
@@ -192,11 +188,7 @@ uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState
   const uint64_t n = power > 0 ? static_cast<uint64_t>(std::max<long long>(lines, 1)) : 0;
   if (n == 0) return 0;
   // The Halton points' shift: the light's stream, past the shards' indices.
-  double shift[4];
-  {
-    Rng rng = make_rng(seed, kLightStream, kLightShiftIndex);
-    for (double& v : shift) v = uniform(rng);
-  }
+  const ShiftedHalton points(make_rng(seed, kLightStream, kLightShiftIndex));
   std::vector<ShardAccumulator> acc(shards);
   run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
     ShardAccumulator& a = acc[s];
@@ -204,7 +196,7 @@ uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState
     const double share[3] = {power / static_cast<double>(n), power / static_cast<double>(n), power / static_cast<double>(n)};
     for (uint64_t k = n * s / shards; k < n * (s + 1) / shards; ++k) {
       double u[4];
-      if (halton) shifted_halton(k, shift, u);
+      if (halton) points.point(k, u);
       else
         for (int i = 0; i < 3; ++i) u[i] = uniform(rng);
       const Vec3 dir = light.sample(u[0], u[1], u[2]);

@@ -156,11 +156,11 @@ class EmitterPoints {
  public:
   EmitterPoints(unsigned long long seed, size_t emitter);
   size_t emitter() const { return emitter_; }
-  void point(uint64_t index, double u[4]) const;
+  void point(uint64_t index, double u[4]) const { points_.point(index, u); }
 
  private:
   size_t emitter_;
-  double shift_[4];
+  ShiftedHalton points_;
 };
 
 // Calls line(e, code) for lines [block * kFirstShotBlock, ...) of block

@@ -59,11 +59,12 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
   // Emitting faces, then the point sources (-1 - light), and the power of
   // each (W, mean of the channels; a light's is the same in every channel).
   std::vector<int> emitters;
-  std::vector<double> cumulative;
+  std::vector<double> powers, cumulative;
   double total = 0;
   const auto add = [&](int emitter, double power) {
     if (!(power > 0)) return;
     emitters.push_back(emitter);
+    powers.push_back(power);
     total += power;
     cumulative.push_back(total);
   };
@@ -90,9 +91,7 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
   // Streams: the local lines' blocks first, then the global lines'.
   const unsigned long long global_streams = block_count(lines);
   std::vector<double> reflected(faces, 0.0);  // W
-  // Lines per emitter in a replica of a stratified first shot.
-  std::vector<double> powers(emitters.size());
-  for (size_t e = 0; e < emitters.size(); ++e) powers[e] = cumulative[e] - (e > 0 ? cumulative[e - 1] : 0.0);
+  // Lines in a replica of a stratified first shot.
   const uint64_t per_replica = std::max<uint64_t>(1, lines / kPilotReplicas);
   if (stratified && per_replica >= kStratifiedLines * emitters.size()) {
     // As the first shot shoots them (first_shot.sequence = "halton"): each
@@ -108,17 +107,17 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
     in_blocks<std::pair<uint64_t, double>>(
         kPilotReplicas * m, seed, 0,
         [&](uint64_t from, uint64_t n, Rng&, std::vector<std::pair<uint64_t, double>>& out) {
-          uint64_t shifted = ~uint64_t{0};  // the replica and emitter `shift` is of
-          double shift[4], u[4];
+          uint64_t shifted = ~uint64_t{0};  // the replica and emitter of `points`
+          std::optional<ShiftedHalton> points;
+          double u[4];
           for (uint64_t i = from; i < from + n; ++i) {
             const uint64_t r = i / m, j = i % m;
             const size_t e = static_cast<size_t>(std::upper_bound(first.begin(), first.end(), j) - first.begin() - 1);
             if (r * emitters.size() + e != shifted) {
               shifted = r * emitters.size() + e;
-              Rng rng = make_rng(seed, kPilotStream, kShiftIndex + shifted);
-              for (double& v : shift) v = uniform(rng);
+              points.emplace(make_rng(seed, kPilotStream, kShiftIndex + shifted));
             }
-            shifted_halton(j - first[e], shift, u);
+            points->point(j - first[e], u);
             const int emitter = emitters[e];
             Vec3 org, dir;
             if (emitter < 0) {

@@ -98,7 +98,7 @@ long long chosen_first_shot_lines(const Options& options, const Scene& scene, co
   const auto start = clock::now();
   const Pilot pilot = run_pilot(scene, mesh, nullptr, options.lines.seed,
                                 static_cast<uint64_t>(options.lines.pilot_lines()),
-                                options.first_shot.sequence == "halton", &tracer.get(), lights);
+                                options.first_shot.halton(), &tracer.get(), lights);
   record.shot_lines_from = "pilot";
   record.shot_share = first_shot_share(pilot);
   record.pilot_seconds = seconds_since(start);
@@ -143,7 +143,7 @@ void start_state(const Options& run_options, const SolveFlags& flags, const Scen
   for (size_t l = 0; l < lights.size(); ++l) {
     const uint64_t shot_lines = shoot_light(mesh, tracer.get(), state, lights[l], shot.light_lines[l],
                                             options.lines.seed + 7919 * (l + 1), options.solver.shards,
-                                            options.first_shot.sequence == "halton");
+                                            options.first_shot.halton());
     record.shot.lines += shot_lines;
     record.lights[l].first_shot_lines = shot_lines;
   }
@@ -324,8 +324,7 @@ void solve_on_threads(const Options& options, const SolveFlags& flags, int threa
   const TracerOnDemand tracer(mesh);
 
   RadiosityState state = make_state(prepared.scene, mesh);
-  std::vector<PointLight> lights;
-  for (const LightOptions& l : options.scene.lights) lights.push_back(make_light(l));
+  const std::vector<PointLight> lights = make_lights(options.scene.lights);
   for (const PointLight& l : lights) {
     spdlog::info("light {}: {:.4g} lm, {:.4g} W (at 179 lm/W)", l.options.name, l.flux(), l.power());
     record.lights.push_back({l.options.name, l.flux(), l.power(), 0});

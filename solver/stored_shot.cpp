@@ -324,8 +324,7 @@ StoredShotStats store_first_shot(const Options& options, const PreparedScene& pr
   const fs::path path = options.store.dir / kStoredShotFile;
   StoredShotStats stats;
   RadiosityState state = make_state(prepared.scene, mesh);
-  std::vector<PointLight> lights;
-  for (const LightOptions& l : options.scene.lights) lights.push_back(make_light(l));
+  const std::vector<PointLight> lights = make_lights(options.scene.lights);
   const FirstShotPlan plan =
       (crossings ? plan_run_first_shot(options, mesh, state, *crossings, lights)
                  : plan_run_first_shot(options, mesh, state, BoxStore(options, mesh).face_crossings(mesh.face_count()), lights))

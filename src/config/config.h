@@ -80,6 +80,7 @@ struct Options {
     // "halton": an emitter's lines take the points of a randomised Halton
     // sequence of its own (stratified); "random": independent points.
     std::string sequence = "halton";
+    bool halton() const { return sequence == "halton"; }
   } first_shot;
 
   struct Solver {

@@ -174,6 +174,12 @@ Vec3 PointLight::sample(double u1, double u2, double u3) const {
   return normalize(nadir * std::cos(theta) + (c0 * std::cos(phi) + c90 * std::sin(phi)) * std::sin(theta));
 }
 
+std::vector<PointLight> make_lights(const std::vector<LightOptions>& options) {
+  std::vector<PointLight> lights;
+  for (const LightOptions& l : options) lights.push_back(make_light(l));
+  return lights;
+}
+
 PointLight make_light(const LightOptions& options) {
   PointLight light;
   light.options = options;

@@ -68,5 +68,7 @@ struct PointLight {
 };
 
 PointLight make_light(const LightOptions& options);
+// make_light of each of a config's [[light]]s, in order.
+std::vector<PointLight> make_lights(const std::vector<LightOptions>& options);
 
 }  // namespace mpath

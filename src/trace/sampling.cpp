@@ -120,17 +120,19 @@ double radical_inverse(uint64_t index, unsigned base) {
   }
 }
 
-LineSequence::LineSequence(const std::string& kind, unsigned long long seed, unsigned pass) : halton_(kind == "halton") {
-  Rng rng = make_rng(seed, 4, pass);
+ShiftedHalton::ShiftedHalton(Rng rng) {
   for (double& s : shift_) s = uniform(rng);
 }
+
+LineSequence::LineSequence(const std::string& kind, unsigned long long seed, unsigned pass)
+    : halton_(kind == "halton"), points_(make_rng(seed, 4, pass)) {}
 
 void LineSequence::point(uint64_t index, Rng& rng, double u[4]) const {
   if (!halton_) {
     for (int k = 0; k < 4; ++k) u[k] = uniform(rng);
     return;
   }
-  shifted_halton(index, shift_, u);
+  points_.point(index, u);
 }
 
 void shifted_halton(uint64_t index, const double shift[4], double u[4]) {

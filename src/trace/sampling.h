@@ -52,6 +52,23 @@ class BoxLineSampler {
   double hair_;
 };
 
+double radical_inverse(uint64_t index, unsigned base);
+// Point `index` of the Halton sequence in bases 2, 3, 5 and 7, each
+// coordinate shifted by shift[k] modulo 1 (a Cranley-Patterson rotation).
+void shifted_halton(uint64_t index, const double shift[4], double u[4]);
+
+// The Halton points of shifted_halton with a shift of four numbers drawn from
+// `rng`: each point is uniform in [0, 1)^4, and the points of one shift
+// cover it evenly.
+class ShiftedHalton {
+ public:
+  explicit ShiftedHalton(Rng rng);
+  void point(uint64_t index, double u[4]) const { shifted_halton(index, shift_, u); }
+
+ private:
+  double shift_[4];
+};
+
 // Where the 4D points of a set of global lines come from: independent random
 // numbers, or a randomised Halton sequence (bases 2, 3, 5, 7, shifted modulo 1
 // by a random vector per pass: Cranley-Patterson rotation), whose lines cover
@@ -63,12 +80,7 @@ class LineSequence {
 
  private:
   bool halton_ = false;
-  double shift_[4] = {0, 0, 0, 0};
+  ShiftedHalton points_;
 };
-
-double radical_inverse(uint64_t index, unsigned base);
-// Point `index` of the Halton sequence in bases 2, 3, 5 and 7, each
-// coordinate shifted by shift[k] modulo 1 (a Cranley-Patterson rotation).
-void shifted_halton(uint64_t index, const double shift[4], double u[4]);
 
 }  // namespace mpath
