@@ -273,9 +273,18 @@ struct SetShardPool {
     shards.clear();
   }
 
+  void release() {
+    const std::lock_guard<std::mutex> lock(mutex);
+    std::vector<SetShard>().swap(free);
+  }
+
   std::mutex mutex;
   std::vector<SetShard> free;
 };
+
+void release_pass_memory(const LineSets& sets) {
+  if (sets.pool) sets.pool->release();
+}
 
 namespace {
 

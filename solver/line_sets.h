@@ -57,6 +57,11 @@ struct LineSets {
 // the pairs the box carries while it traced; no line is read here).
 LineSets derive_line_sets(const BoxStore& store, const PatchMesh& mesh);
 
+// Frees the passes' pooled shard accumulators (the next pass allocates them
+// again), so that what a solve does after its passes (the solution, images,
+// grids) reuses their memory instead of touching fresh pages.
+void release_pass_memory(const LineSets& sets);
+
 // One iteration: every box's pass, deepest first, then the root (a class's
 // first carrier is its own box); then the uncarried faces' power shot with
 // local lines. Every line of every box when `power_per_line` is 0;

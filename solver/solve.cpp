@@ -26,6 +26,7 @@
 #include "accelerated_shot.h"
 #include "box_store.h"
 #include "hierarchical.h"
+#include "line_sets.h"
 #include "ranks.h"
 #include "report.h"
 
@@ -336,6 +337,7 @@ void solve_on_threads(const Options& options, const SolveFlags& flags, int threa
   const auto began = clock::now();
   start_state(options, flags, prepared.scene, mesh, tracer, store.get(), checkpoint, lights, state, record);
   run_iterations(options, mesh, tracer, store.get(), checkpoint, began, state, record);
+  if (store && store->line_sets()) release_pass_memory(*store->line_sets());
   log_remaining(options, mesh, store.get(), state, record.iterations, record.warnings);
   if (!Ranks::root()) return;
   write_outputs(options, mesh, tracer, lights, state, record);
