@@ -421,6 +421,13 @@ std::vector<double> BoxStore::face_crossings(size_t faces) const {
   return out;
 }
 
+std::vector<double> BoxStore::root_crossings(size_t faces) const {
+  std::vector<double> out(faces, 0.0);
+  const StoreBox& root = boxes_.front();
+  for (size_t f = 0; f < root.face_global.size(); ++f) out[root.face_global[f]] = root.face_crossings[f];
+  return out;
+}
+
 std::vector<bool> BoxStore::faces_crossed(size_t faces) const {
   std::vector<bool> out(faces, false);
   for (const StoreBox& b : boxes_)

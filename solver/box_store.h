@@ -117,6 +117,8 @@ class BoxStore {
   uint64_t bytes() const { return total(&StoreBox::bytes); }
   // Per mesh face: crossings by the lines of every box that holds it.
   std::vector<double> face_crossings(size_t faces) const;
+  // The same for the root's lines alone (those that cross the whole scene).
+  std::vector<double> root_crossings(size_t faces) const;
   // Per mesh face: crossed by the lines of any box.
   std::vector<bool> faces_crossed(size_t faces) const;
 

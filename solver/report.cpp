@@ -122,6 +122,9 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
                       {"sequence", r.shot.halton ? "halton" : "random"},
                       {"lines_from", r.shot_lines_from}, {"pilot_share", r.shot_share},
                       {"pilot_seconds", r.pilot_seconds}}},
+      {"second_shot", {{"lines", r.second_shot.lines}, {"faces", r.second_shot.faces},
+                       {"power_share", r.second_shot.power_share}, {"seconds", r.second_shot.seconds},
+                       {"sequence", r.second_shot.halton ? "halton" : "random"}}},
       {"lights", [&] {
          json lights = json::array();
          for (const SolveRecord::Light& l : r.lights)
@@ -129,7 +132,7 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
                              {"first_shot_lines", l.first_shot_lines}});
          return lights;
        }()},
-      {"lines", {{"global", r.iterations.lines}, {"hits", r.iterations.hits}, {"local", r.shot.lines},
+      {"lines", {{"global", r.iterations.lines}, {"hits", r.iterations.hits}, {"local", r.shot.lines}, {"local_second_shot", r.second_shot.lines},
                  {"local_uncarried", r.uncarried_lines}}},
       {"iterations", {{"count", r.iterations.passes.size()}, {"converged", r.iterations.converged},
                       {"tolerance", options.solver.tolerance}, {"cap", options.solver.iterations},

@@ -10,6 +10,7 @@
 #include "box_store.h"
 #include "config.h"
 #include "first_shot.h"
+#include "second_shot.h"
 #include "hierarchical.h"
 #include "iteration.h"
 #include "prepared_scene.h"
@@ -29,6 +30,7 @@ struct SolveRecord {
   int ranks = 1;  // MPI ranks that shared the passes
   SolveTimings timings;
   FirstShotStats shot;
+  SecondShotStats second_shot;
   // How the first shot's lines were set when first_shot.lines is 0: "pilot"
   // (this run's), "store" (the store's first shot), else "config".
   std::string shot_lines_from = "config";

@@ -14,6 +14,7 @@
 #include "error.h"
 #include "first_shot.h"
 #include "pilot.h"
+#include "second_shot.h"
 #include "stored_shot.h"
 #include "store_identity.h"
 #include "json_text.h"
@@ -147,6 +148,14 @@ void start_state(const Options& run_options, const SolveFlags& flags, const Scen
                                             options.first_shot.halton());
     record.shot.lines += shot_lines;
     record.lights[l].first_shot_lines = shot_lines;
+  }
+  // The faces the first shot left brightest shoot their power with local
+  // lines of their own (second_shot.h).
+  if (const FirstShotPlan second = plan_run_second_shot(options, mesh, state, store); !second.emitters.empty()) {
+    record.second_shot = second_shot(mesh, tracer.get(), state, second, options.lines.seed, options.solver.shards);
+    spdlog::info("second shot: {} local lines from {} face(s) holding {:.1f} % of the unshot power ({:.2f} s)",
+                 record.second_shot.lines, record.second_shot.faces, 100.0 * record.second_shot.power_share,
+                 record.second_shot.seconds);
   }
 }
 

@@ -1,4 +1,5 @@
 #include "test_util.h"
+#include "second_shot.h"
 
 #include "prepared_scene.h"
 
@@ -168,6 +169,8 @@ StoredSolve solve_stored(const Options& options, const std::function<void(const 
     accelerated = std::make_unique<SubsceneNearest>(s.mesh, store);
   first_shot(s.mesh, tracer.get(), s.state, first_shot_lines(options), options.lines.seed, options.solver.shards,
              emitter_crossings(options, store.face_crossings(s.mesh.face_count())), accelerated.get());
+  if (const FirstShotPlan second = plan_run_second_shot(options, s.mesh, s.state, &store); !second.emitters.empty())
+    second_shot(s.mesh, tracer.get(), s.state, second, options.lines.seed, options.solver.shards);
   iterate(options, s.state, s.log, [&](unsigned pass) {
     const PassStats p = stored_iteration(options, s.mesh, tracer, store, s.state, s.log, pass, options.solver.shards);
     if (after_each) after_each(s.state);
@@ -196,6 +199,8 @@ Solved solve_classic_in_memory(const Scene& scene, const Options& options, bool 
   const std::vector<double> crossings_per_area = emitter_crossings(options, forecast_crossings(s.mesh, static_cast<double>(options.lines.total)));
   first_shot(s.mesh, tracer, s.state, first_shot_lines(options), options.lines.seed, options.solver.shards,
              crossings_per_area);
+  if (const FirstShotPlan second = plan_run_second_shot(options, s.mesh, s.state, nullptr); !second.emitters.empty())
+    second_shot(s.mesh, tracer, s.state, second, options.lines.seed, options.solver.shards);
   s.log = solve_classic(options, s.mesh, tracer, s.state, options.solver.shards);
   return s;
 }

@@ -83,6 +83,13 @@ struct Options {
     bool halton() const { return sequence == "halton"; }
   } first_shot;
 
+  struct SecondShot {
+    // Local lines of the second shot, as a share of lines.total: after the
+    // first shot the faces holding the most unshot power for their size
+    // shoot it with local lines (second_shot.h); 0: no second shot.
+    double share = 0.25;
+  } second_shot;
+
   struct Solver {
     SolverMethod method = SolverMethod::hierarchical;
     int iterations = 100;  // a cap: runs stop at solver.tolerance (high reflectance needs tens)

@@ -441,6 +441,12 @@ std::vector<ConfigKey> make_table() {
        "of its own) or "
        "`\"random\"`; see algorithm.md",
        SET(o.first_shot.sequence = get_choice(n, s, "sequence", {"random", "halton"})), GET(o.first_shot.sequence)},
+      {"second_shot.share",
+       "local lines of the second shot, as a share of `lines.total`: after the first shot, the faces holding the "
+       "most unshot power for their size (a lamp's shade lit by its bulb) shoot it with local lines instead of "
+       "leaving it to the global lines, each where it would get more local lines than global crossings; 0: none "
+       "(algorithm.md)",
+       SET(o.second_shot.share = in_range(get_number(n, s), 0.0, 4.0, s)), GET(o.second_shot.share)},
       {"solver.method",
        "`\"hierarchical\"`, `\"multipath\"` (stored lines, root box only) or `\"classic\"` (fresh lines, no store)",
        SET(o.solver.method = get_method(n, s)), GET(std::string(to_string(o.solver.method)))},
