@@ -136,26 +136,13 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
   FirstShotStats stats;
   leave_to_global_lines(plan, state);
   const uint64_t total = plan.lines();
-  const uint64_t blocks = plan.blocks();
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   const auto nearest = [&](int from, const Vec3& org, const Vec3& dir) {
     return accelerated ? accelerated->nearest_from(from, org, dir) : tracer.nearest_from(from, org, dir, tfar);
   };
-  std::vector<ShardAccumulator> acc(shards);
-  Progress progress("first shot", total, "lines", true);
-  run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
-    ShardAccumulator& a = acc[s];
-    const uint64_t lo = blocks * s / shards, hi = blocks * (s + 1) / shards;
-    for (uint64_t b = lo; b < hi; ++b) {
-      const uint64_t before = a.lines;
-      trace_first_shot_block(mesh, plan, seed, b, nearest, [&](size_t e, uint32_t code) {
-        receive_emitter_lines(state, plan, e, code, 1, a);
-        ++a.lines;
-      });
-      progress.advance(a.lines - before);
-    }
-  });
-  progress.finish();
+  const std::vector<ShardAccumulator> acc =
+      shoot_plan(mesh, state, plan, seed, shards, "first shot", nearest,
+                 [&](size_t e, uint32_t code, ShardAccumulator& a) { receive_emitter_lines(state, plan, e, code, 1, a); });
 
   // Merge in shard order: the result does not depend on scheduling.
   merge_received(acc, state);

@@ -11,6 +11,7 @@
 
 #include "config.h"
 #include "luminaire.h"
+#include "progress.h"
 #include "radiosity_state.h"
 #include "sampling.h"
 #include "tracer.h"
@@ -183,6 +184,33 @@ void trace_first_shot_block(const PatchMesh& mesh, const FirstShotPlan& plan, un
     points->point(l - plan.first[e], u);
     line(e, local_line_outcome(mesh, plan.emitters[e], u, nearest));
   }
+}
+
+// Traces `plan`'s lines shard by shard on the threads (`seed` gives their
+// streams, `label` names the progress) and calls receive(e, code, acc) for
+// each line, in order within a shard; returns the shards' accumulators, for
+// the caller to merge in shard order. The first and second shots' loop.
+template <typename Nearest, typename Receive>
+std::vector<ShardAccumulator> shoot_plan(const PatchMesh& mesh, const RadiosityState& state, const FirstShotPlan& plan,
+                                         unsigned long long seed, int shards, const char* label,
+                                         const Nearest& nearest, const Receive& receive) {
+  const uint64_t blocks = plan.blocks();
+  std::vector<ShardAccumulator> acc(static_cast<size_t>(shards));
+  Progress progress(label, plan.lines(), "lines", true);
+  run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
+    ShardAccumulator& a = acc[s];
+    const uint64_t lo = blocks * s / shards, hi = blocks * (s + 1) / shards;
+    for (uint64_t b = lo; b < hi; ++b) {
+      const uint64_t before = a.lines;
+      trace_first_shot_block(mesh, plan, seed, b, nearest, [&](size_t e, uint32_t code) {
+        receive(e, code, a);
+        ++a.lines;
+      });
+      progress.advance(a.lines - before);
+    }
+  });
+  progress.finish();
+  return acc;
 }
 
 // Adds `code` received from plan.emitters[e]: `lines` of its lines' power

@@ -6,7 +6,6 @@
 
 #include "box_store.h"
 #include "classic.h"
-#include "progress.h"
 #include "transport.h"
 
 namespace mpath {
@@ -99,20 +98,13 @@ SecondShotStats second_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosi
       unshot = 0;
     }
   }
-  const unsigned long long own_seed = second_shot_seed(seed);
-  const uint64_t blocks = plan.blocks();
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   const auto nearest = [&](int from, const Vec3& org, const Vec3& dir) {
     return tracer.nearest_from(from, org, dir, tfar);
   };
-  std::vector<ShardAccumulator> acc(static_cast<size_t>(shards));
-  Progress progress("second shot", plan.lines(), "lines", true);
-  run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
-    ShardAccumulator& a = acc[s];
-    const uint64_t lo = blocks * s / shards, hi = blocks * (s + 1) / shards;
-    for (uint64_t b = lo; b < hi; ++b) {
-      const uint64_t before = a.lines;
-      trace_first_shot_block(mesh, plan, own_seed, b, nearest, [&](size_t e, uint32_t code) {
+  const std::vector<ShardAccumulator> acc = shoot_plan(
+      mesh, state, plan, second_shot_seed(seed), shards, "second shot", nearest,
+      [&](size_t e, uint32_t code, ShardAccumulator& a) {
         const int face = plan.emitters[e];
         if (code_contact(code)) {
           // From where the face is pressed against another surface: its
@@ -122,12 +114,7 @@ SecondShotStats second_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosi
         } else {
           receive_outcome(state, face, code, &per_line[e * ch], a);
         }
-        ++a.lines;
       });
-      progress.advance(a.lines - before);
-    }
-  });
-  progress.finish();
   merge_received(acc, state);  // in shard order
   stats.lines = plan.lines();
   stats.faces = plan.emitters.size();

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <random>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
@@ -820,10 +821,10 @@ TEST(Hierarchy, TheGridBuildsTheHierarchyThatComparingEveryPairBuilds) {
       for (int j = 0; j < 12; ++j) {  // two stacks of 12 flat squares
         const double z = 3 + 0.01 * j;
         test::add_quad(scene, {x, y + 4, z}, {x + a, y + 4, z}, {x + a, y + 4 + a, z}, {x, y + 4 + a, z}, m,
-                       test::add_object(scene, "p" + std::to_string(k)));
+                       test::add_object(scene, fmt::format("p{}", k)));
         test::add_quad(scene, {x + f * a, y + 4, z + 0.2}, {x + (f + 1) * a, y + 4, z + 0.2},
                        {x + (f + 1) * a, y + 4 + a, z + 0.2}, {x + f * a, y + 4 + a, z + 0.2}, m,
-                       test::add_object(scene, "q" + std::to_string(k)));
+                       test::add_object(scene, fmt::format("q{}", k)));
       }
     }
     HierarchyOptions o;
