@@ -1,9 +1,10 @@
-// libFuzzer target for the store's first shot (first_shot.bin). The input is
-// read as the first shot of a small fixed scene (a closed room of 6 faces
-// with a cube of 6 in it, every face emitting), with the plan the file itself
-// records, so that its frames of lines are read too: anything but a file the
-// writer made must end in InputError. Its bytes also choose a plan that is
-// written and read back, which must give what tracing it gives.
+// libFuzzer target for the store's first and second shots (first_shot.bin,
+// second_shot.bin). The input is read as each of them for a small fixed
+// scene (a closed room of 6 faces with a cube of 6 in it, every face
+// emitting), with the plan the file itself records, so that its frames of
+// lines are read too: anything but a file the writer made must end in
+// InputError. Its bytes also choose plans of both shots that are written and
+// read back, which must give what tracing them gives.
 #include <cmath>
 #include <cstring>
 
@@ -55,6 +56,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     (void)replay_stored_shot(path, mesh, plan, seed, state, stats);
   } catch (const InputError&) {
   }
+  try {  // as a second shot, after a first shot
+    static const RadiosityState after = [&] {
+      RadiosityState state = fresh;
+      first_shot(mesh, tracer, state, plan_first_shot(mesh, fresh, 500, {}), 1, 1);
+      return state;
+    }();
+    unsigned long long seed = 0;
+    const FirstShotPlan plan = read_stored_plan(path, mesh.face_count(), seed, ShotKind::second);
+    RadiosityState state = after;
+    SecondShotStats stats;
+    (void)replay_stored_second_shot(path, mesh, plan, seed, state, stats);
+  } catch (const InputError&) {
+  }
 
   // A plan of the input's bytes, written and read back.
   const long long lines = size > 1 ? 1 + (data[0] | data[1] << 8) % 3000 : 1;
@@ -71,9 +85,24 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   first_shot(mesh, tracer, traced, plan, seed, 1);
   FirstShotStats stats;
   if (!replay_stored_shot(written, mesh, plan, seed, read, stats).empty()) __builtin_trap();
-  for (size_t i = 0; i < traced.phi.size(); ++i)
-    if (std::abs(traced.phi[i] - read.phi[i]) > 1e-12 * (1 + std::abs(traced.phi[i])) ||
-        std::abs(traced.unshot[i] - read.unshot[i]) > 1e-12 * (1 + std::abs(traced.unshot[i])))
-      __builtin_trap();
+  const auto same = [](const RadiosityState& a, const RadiosityState& b) {
+    for (size_t i = 0; i < a.phi.size(); ++i)
+      if (std::abs(a.phi[i] - b.phi[i]) > 1e-12 * (1 + std::abs(a.phi[i])) ||
+          std::abs(a.unshot[i] - b.unshot[i]) > 1e-12 * (1 + std::abs(a.unshot[i])))
+        return false;
+    return true;
+  };
+  if (!same(traced, read)) __builtin_trap();
+
+  // The second shot that follows, of as many lines, every face taking part
+  // (no crossings) or those the input's crossings leave.
+  const FirstShotPlan second = plan_second_shot(traced, lines, crossings, size > 4 && data[4] % 2 == 0);
+  if (second.emitters.empty()) return 0;
+  write_stored_shot(written, mesh, tracer, second, seed, 1, ShotKind::second);
+  RadiosityState traced2 = traced;
+  second_shot(mesh, tracer, traced2, second, seed, 1);
+  SecondShotStats second_stats;
+  if (!replay_stored_second_shot(written, mesh, second, seed, traced, second_stats).empty()) __builtin_trap();
+  if (!same(traced2, traced)) __builtin_trap();
   return 0;
 }

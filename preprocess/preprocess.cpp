@@ -153,11 +153,12 @@ bool merge_parts(const fs::path& dir, const ShardSpec& shard, linestore::Manifes
 namespace {
 
 // Traces the shard's part of one box's lines into one file; adds to `stats`,
-// and to `face_crossings` how often the lines cross each face (as
-// BoxStore::face_crossings counts them from the file).
+// and to `crossings` how often the lines cross each face (as
+// BoxStore::face_crossings and, for the root, root_crossings count them from
+// the file).
 linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, const Hierarchy& hierarchy, int box,
                                uint64_t lines, const ShardSpec& shard, const fs::path& dir, int threads,
-                               PreprocessStats& stats, std::vector<double>& face_crossings) {
+                               PreprocessStats& stats, StoreCrossings& crossings) {
   const ChunkTracer chunks(options, mesh, hierarchy, box, lines);
   const uint64_t lo = chunks.chunk_count() * (shard.index - 1) / shard.count;
   const uint64_t hi = chunks.chunk_count() * shard.index / shard.count;
@@ -219,7 +220,10 @@ linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, co
   const std::vector<uint32_t>& patches = hierarchy.boxes[box].patches;
   for (size_t k = 0; k < patches.size(); ++k)
     for (int face : mesh.patch_faces[patches[k]])
-      if (face >= 0) face_crossings[face] += total.counts.patch_crossings[k];
+      if (face >= 0) {
+        crossings.all[face] += total.counts.patch_crossings[k];
+        if (box == 0) crossings.root[face] += total.counts.patch_crossings[k];
+      }
   auto t0 = clock::now();
   writer.finish(total.counts);
   write_seconds += seconds(clock::now() - t0);
@@ -235,17 +239,21 @@ linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, co
           hi - lo, bytes, hash_file(path)};
 }
 
-// Once the store is complete, the first shot a solve of it would trace
-// (stored_shot.h); not with first_shot.accelerate, whose solves trace it.
-// `face_crossings`: counted by this run over every line of the store (null:
-// the store is opened to count them).
-void add_first_shot(const Options& options, const PreparedScene& prepared, PreprocessStats& stats,
-                    const std::vector<double>* face_crossings) {
+// Once the store is complete, the first and second shots a solve of it
+// would trace (stored_shot.h); not with first_shot.accelerate, whose solves
+// trace them.
+// `crossings`: counted by this run over every line of the store (null: the
+// store is opened to count them).
+void add_shots(const Options& options, const PreparedScene& prepared, PreprocessStats& stats,
+                    const StoreCrossings* crossings) {
   if (options.first_shot.accelerate) return;
-  const StoredShotStats shot = store_first_shot(options, prepared, face_crossings);
-  stats.first_shot_lines = shot.lines;
-  stats.first_shot_bytes = shot.bytes;
-  stats.first_shot_seconds = shot.seconds;
+  const StoredShots shots = store_shots(options, prepared, crossings);
+  stats.first_shot_lines = shots.first.lines;
+  stats.first_shot_bytes = shots.first.bytes;
+  stats.first_shot_seconds = shots.first.seconds;
+  stats.second_shot_lines = shots.second.lines;
+  stats.second_shot_bytes = shots.second.bytes;
+  stats.second_shot_seconds = shots.second.seconds;
 }
 
 }  // namespace
@@ -321,7 +329,7 @@ PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& s
     note_other_hierarchy(*finished, dir, base);
     stats.skipped = true;
     if (shard.count > 1) stats.manifest_written = merge_parts(dir, shard, base);
-    if (shard.count == 1 || stats.manifest_written) add_first_shot(run, prepared, stats, nullptr);
+    if (shard.count == 1 || stats.manifest_written) add_shots(run, prepared, stats, nullptr);
     return stats;
   }
   // The store is incomplete from now until this run's manifest is written.
@@ -331,17 +339,17 @@ PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& s
 
   linestore::Manifest m = base;
   nlohmann::json per_box = nlohmann::json::array();
-  std::vector<double> face_crossings(mesh.face_count(), 0.0);
+  StoreCrossings crossings{std::vector<double>(mesh.face_count(), 0.0), std::vector<double>(mesh.face_count(), 0.0)};
   for (int b : hierarchy.depth_order) {
     const auto t0 = clock::now();
-    m.files.push_back(trace_box(options, mesh, hierarchy, b, budget[b], shard, dir, threads, stats, face_crossings));
+    m.files.push_back(trace_box(options, mesh, hierarchy, b, budget[b], shard, dir, threads, stats, crossings));
     per_box.push_back({{"box", b}, {"lines", m.files.back().lines}, {"events", m.files.back().events},
                        {"bytes", m.files.back().bytes}, {"seconds", seconds(clock::now() - t0)}});
   }
   linestore::write_manifest(record, m);
   stats.manifest_written = shard.count == 1 || merge_parts(dir, shard, base);
   // A shard's lines are part of the store's: the last shard opens the store to count them all.
-  if (stats.manifest_written) add_first_shot(run, prepared, stats, shard.count == 1 ? &face_crossings : nullptr);
+  if (stats.manifest_written) add_shots(run, prepared, stats, shard.count == 1 ? &crossings : nullptr);
   stats.wall_seconds = seconds(clock::now() - start);
   const nlohmann::json timings = {{"shard", fmt::format("{}/{}", shard.index, shard.count)}, {"lines", stats.lines},
                                  {"events", stats.events}, {"bytes", stats.bytes}, {"raw_bytes", stats.raw_bytes},
@@ -350,6 +358,9 @@ PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& s
                                  {"first_shot_seconds", stats.first_shot_seconds},
                                  {"first_shot_lines", stats.first_shot_lines},
                                  {"first_shot_bytes", stats.first_shot_bytes},
+                                 {"second_shot_seconds", stats.second_shot_seconds},
+                                 {"second_shot_lines", stats.second_shot_lines},
+                                 {"second_shot_bytes", stats.second_shot_bytes},
                                  {"trace_seconds", stats.trace_seconds}, {"encode_seconds", stats.encode_seconds},
                                  {"compress_seconds", stats.compress_seconds}, {"write_seconds", stats.write_seconds},
                                  {"wall_seconds", stats.wall_seconds}, {"threads", threads},

@@ -26,6 +26,9 @@ struct PreprocessStats {
   // The store's first shot (first_shot.bin), written when the store is complete.
   uint64_t first_shot_lines = 0, first_shot_bytes = 0;
   double first_shot_seconds = 0;
+  // The same for the second shot (second_shot.bin).
+  uint64_t second_shot_lines = 0, second_shot_bytes = 0;
+  double second_shot_seconds = 0;
   bool skipped = false;  // the shard's file was already finished and verified
   bool manifest_written = false;
 };

@@ -200,4 +200,14 @@ uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState
   return n;
 }
 
+std::vector<uint64_t> shoot_lights(const Options& options, const PatchMesh& mesh, const Tracer& tracer,
+                                   RadiosityState& state, const std::vector<PointLight>& lights,
+                                   const std::vector<long long>& light_lines) {
+  std::vector<uint64_t> shot(lights.size());
+  for (size_t l = 0; l < lights.size(); ++l)
+    shot[l] = shoot_light(mesh, tracer, state, lights[l], light_lines[l], options.lines.seed + 7919 * (l + 1),
+                          options.solver.shards, options.first_shot.halton());
+  return shot;
+}
+
 }  // namespace mpath

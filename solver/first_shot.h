@@ -230,6 +230,11 @@ void leave_to_global_lines(const FirstShotPlan& plan, RadiosityState& state);
 // table evenly; else independent numbers. Returns the lines shot.
 uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const PointLight& light,
                      long long lines, unsigned long long seed, int shards, bool halton);
+// A run's lights, light l along light_lines[l] lines (RunFirstShot) from
+// streams of its own; returns the lines each shot.
+std::vector<uint64_t> shoot_lights(const Options& options, const PatchMesh& mesh, const Tracer& tracer,
+                                   RadiosityState& state, const std::vector<PointLight>& lights,
+                                   const std::vector<long long>& light_lines);
 
 // Traces `plan` (its global faces left to the global lines). `accelerated`:
 // find nearest hits through the subscenes' associated patches

@@ -124,7 +124,8 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
                       {"pilot_seconds", r.pilot_seconds}}},
       {"second_shot", {{"lines", r.second_shot.lines}, {"faces", r.second_shot.faces},
                        {"power_share", r.second_shot.power_share}, {"seconds", r.second_shot.seconds},
-                       {"sequence", r.second_shot.halton ? "halton" : "random"}}},
+                       {"sequence", r.second_shot.halton ? "halton" : "random"},
+                       {"from_store", r.second_shot.stored}, {"traced_because", r.second_shot.traced_because}}},
       {"lights", [&] {
          json lights = json::array();
          for (const SolveRecord::Light& l : r.lights)

@@ -11,15 +11,6 @@
 namespace mpath {
 namespace {
 
-// The second shot's lines and Halton shifts come from streams of their own:
-// the first shot's streams, drawn from this seed instead of lines.seed.
-unsigned long long second_shot_seed(unsigned long long seed) {
-  unsigned long long z = seed + 0x5EC0D5407A11F00DULL;  // splitmix64 of the salted seed
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
-
 double unshot_power(const RadiosityState& state, size_t f) {
   double p = 0;
   for (int c = 0; c < state.channels; ++c) p += state.unshot[state.at(f, c)];
@@ -27,6 +18,13 @@ double unshot_power(const RadiosityState& state, size_t f) {
 }
 
 }  // namespace
+
+unsigned long long second_shot_stream(unsigned long long seed) {
+  unsigned long long z = seed + 0x5EC0D5407A11F00DULL;  // splitmix64 of the salted seed
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
 
 FirstShotPlan plan_second_shot(const RadiosityState& state, long long budget, const std::vector<double>& crossings,
                                bool halton) {
@@ -71,54 +69,82 @@ FirstShotPlan plan_second_shot(const RadiosityState& state, long long budget, co
 
 FirstShotPlan plan_run_second_shot(const Options& options, const PatchMesh& mesh, const RadiosityState& state,
                                    const BoxStore* store) {
-  const auto total = static_cast<double>(options.lines.total);
   if (!(options.second_shot.share > 0)) return plan_second_shot(state, 0, {}, options.first_shot.halton());
-  return plan_second_shot(state, std::llround(options.second_shot.share * total),
-                          store ? store->root_crossings(mesh.face_count()) : forecast_crossings(mesh, total),
-                          options.first_shot.halton());
+  const auto total = static_cast<double>(options.lines.total);
+  return plan_run_second_shot(options, state,
+                              store ? store->root_crossings(mesh.face_count()) : forecast_crossings(mesh, total));
+}
+
+FirstShotPlan plan_run_second_shot(const Options& options, const RadiosityState& state,
+                                   const std::vector<double>& crossings) {
+  const long long budget =
+      options.second_shot.share > 0 ? std::llround(options.second_shot.share * static_cast<double>(options.lines.total)) : 0;
+  return plan_second_shot(state, budget, crossings, options.first_shot.halton());
+}
+
+std::vector<double> second_shot_line_power(const RadiosityState& state, const FirstShotPlan& plan) {
+  const int ch = state.channels;
+  std::vector<double> per_line(plan.emitters.size() * static_cast<size_t>(ch));
+  for (size_t e = 0; e < plan.emitters.size(); ++e)
+    for (int c = 0; c < ch; ++c)
+      per_line[e * ch + c] = state.unshot[state.at(static_cast<size_t>(plan.emitters[e]), c)] /
+                             static_cast<double>(plan.count(e));
+  return per_line;
+}
+
+void receive_second_shot_lines(const RadiosityState& state, const FirstShotPlan& plan,
+                               const std::vector<double>& per_line, size_t e, uint32_t code, uint64_t lines,
+                               ShardAccumulator& acc) {
+  const int ch = state.channels;
+  const int face = plan.emitters[e];
+  double power[3];
+  for (int c = 0; c < ch; ++c) power[c] = per_line[e * ch + c] * static_cast<double>(lines);
+  if (code_contact(code)) {
+    // From where the face is pressed against another surface: its
+    // reflected power does not leave there (a pass's crossing that touches
+    // keeps its share at the face too); it stays unshot.
+    for (int c = 0; c < ch; ++c) acc.faces[static_cast<size_t>(face)].gathered[c] += power[c];
+  } else {
+    receive_outcome(state, face, code, power, acc);
+  }
+}
+
+SecondShotStats finish_second_shot(const FirstShotPlan& plan, const std::vector<ShardAccumulator>& acc,
+                                   RadiosityState& state) {
+  SecondShotStats stats;
+  stats.halton = plan.halton;
+  double all = 0, taken = 0;
+  for (size_t f = 0; f < state.faces; ++f) all += unshot_power(state, f);
+  for (int f : plan.emitters) {
+    taken += unshot_power(state, static_cast<size_t>(f));
+    for (int c = 0; c < state.channels; ++c) state.unshot[state.at(static_cast<size_t>(f), c)] = 0;
+  }
+  merge_received(acc, state);  // in shard order
+  stats.lines = plan.lines();
+  stats.faces = plan.emitters.size();
+  stats.power_share = all > 0 ? taken / all : 0.0;
+  return stats;
 }
 
 SecondShotStats second_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state,
                             const FirstShotPlan& plan, unsigned long long seed, int shards) {
   const auto start = std::chrono::steady_clock::now();
-  SecondShotStats stats;
-  stats.halton = plan.halton;
-  if (plan.emitters.empty()) return stats;
-  const int ch = state.channels;
-  // Each face's unshot power leaves it, a count(e)-th of it along each line.
-  double all = 0, taken = 0;
-  for (size_t f = 0; f < state.faces; ++f) all += unshot_power(state, f);
-  std::vector<double> per_line(plan.emitters.size() * static_cast<size_t>(ch));
-  for (size_t e = 0; e < plan.emitters.size(); ++e) {
-    const size_t f = static_cast<size_t>(plan.emitters[e]);
-    taken += unshot_power(state, f);
-    for (int c = 0; c < ch; ++c) {
-      double& unshot = state.unshot[state.at(f, c)];
-      per_line[e * ch + c] = unshot / static_cast<double>(plan.count(e));
-      unshot = 0;
-    }
+  if (plan.emitters.empty()) {
+    SecondShotStats none;
+    none.halton = plan.halton;
+    return none;
   }
+  const std::vector<double> per_line = second_shot_line_power(state, plan);
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   const auto nearest = [&](int from, const Vec3& org, const Vec3& dir) {
     return tracer.nearest_from(from, org, dir, tfar);
   };
-  const std::vector<ShardAccumulator> acc = shoot_plan(
-      mesh, state, plan, second_shot_seed(seed), shards, "second shot", nearest,
-      [&](size_t e, uint32_t code, ShardAccumulator& a) {
-        const int face = plan.emitters[e];
-        if (code_contact(code)) {
-          // From where the face is pressed against another surface: its
-          // reflected power does not leave there (a pass's crossing that
-          // touches keeps its share at the face too); it stays unshot.
-          for (int c = 0; c < ch; ++c) a.faces[static_cast<size_t>(face)].gathered[c] += per_line[e * ch + c];
-        } else {
-          receive_outcome(state, face, code, &per_line[e * ch], a);
-        }
-      });
-  merge_received(acc, state);  // in shard order
-  stats.lines = plan.lines();
-  stats.faces = plan.emitters.size();
-  stats.power_share = all > 0 ? taken / all : 0.0;
+  const std::vector<ShardAccumulator> acc =
+      shoot_plan(mesh, state, plan, second_shot_stream(seed), shards, "second shot", nearest,
+                 [&](size_t e, uint32_t code, ShardAccumulator& a) {
+                   receive_second_shot_lines(state, plan, per_line, e, code, 1, a);
+                 });
+  SecondShotStats stats = finish_second_shot(plan, acc, state);
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }

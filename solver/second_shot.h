@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "config.h"
@@ -22,6 +23,8 @@ struct SecondShotStats {
   double power_share = 0;    // of the unshot power after the first shot, the share these faces held
   double seconds = 0;
   bool halton = true;
+  bool stored = false;          // read from the store's second_shot.bin instead of traced
+  std::string traced_because;   // why a solve on a store traced it
 };
 
 // Which faces shoot and how many lines each: `budget` local lines shared by
@@ -40,14 +43,33 @@ class BoxStore;
 // across the scene) or, without one, a forecast of a classic first pass.
 FirstShotPlan plan_run_second_shot(const Options& options, const PatchMesh& mesh, const RadiosityState& state,
                                    const BoxStore* store);
+// The same with the crossings given: the root's (BoxStore::root_crossings),
+// for a store not opened.
+FirstShotPlan plan_run_second_shot(const Options& options, const RadiosityState& state,
+                                   const std::vector<double>& crossings);
 
 // The second shot of `plan`: each face's unshot power leaves it along its
 // lines in equal parts, and the faces met keep rho of it as radiosity and
 // unshot power (the first shot's transport); a line that starts where the
-// face touches another surface leaves its part unshot, as a pass's
-// touching crossing does (what a face reflects does not enter a contact). Its own random streams (from
-// `seed`); the same result on any number of threads, shards or ranks.
+// face touches another surface leaves its part unshot, as a pass's touching
+// crossing does (what a face reflects does not enter a contact). Its own
+// random streams (second_shot_stream(seed)); the same result on any number
+// of threads, shards or ranks.
 SecondShotStats second_shot(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state,
                             const FirstShotPlan& plan, unsigned long long seed, int shards);
+
+// The parts of second_shot that a stored second shot (stored_shot.h) shares:
+// the seed of its lines' streams; the power each line carries (per emitter
+// and channel, its face's unshot power over its line count, from the state
+// before the shot); adding `lines` lines of plan.emitters[e] that met
+// `code`; and, once every line is in `acc`, taking the faces' unshot power
+// and merging `acc` in shard order (the stats but the seconds).
+unsigned long long second_shot_stream(unsigned long long seed);
+std::vector<double> second_shot_line_power(const RadiosityState& state, const FirstShotPlan& plan);
+void receive_second_shot_lines(const RadiosityState& state, const FirstShotPlan& plan,
+                               const std::vector<double>& per_line, size_t e, uint32_t code, uint64_t lines,
+                               ShardAccumulator& acc);
+SecondShotStats finish_second_shot(const FirstShotPlan& plan, const std::vector<ShardAccumulator>& acc,
+                                   RadiosityState& state);
 
 }  // namespace mpath

@@ -142,20 +142,30 @@ void start_state(const Options& run_options, const SolveFlags& flags, const Scen
   } else {
     spdlog::info("first shot: {} local lines read from the store ({:.2f} s)", record.shot.lines, record.shot.seconds);
   }
-  for (size_t l = 0; l < lights.size(); ++l) {
-    const uint64_t shot_lines = shoot_light(mesh, tracer.get(), state, lights[l], shot.light_lines[l],
-                                            options.lines.seed + 7919 * (l + 1), options.solver.shards,
-                                            options.first_shot.halton());
-    record.shot.lines += shot_lines;
-    record.lights[l].first_shot_lines = shot_lines;
+  if (!lights.empty()) {
+    const std::vector<uint64_t> shot_lines = shoot_lights(options, mesh, tracer.get(), state, lights, shot.light_lines);
+    for (size_t l = 0; l < lights.size(); ++l) {
+      record.shot.lines += shot_lines[l];
+      record.lights[l].first_shot_lines = shot_lines[l];
+    }
   }
   // The faces the first shot left brightest shoot their power with local
   // lines of their own (second_shot.h).
+  // A kept store's is read where its plan is this run's.
   if (const FirstShotPlan second = plan_run_second_shot(options, mesh, state, store); !second.emitters.empty()) {
-    record.second_shot = second_shot(mesh, tracer.get(), state, second, options.lines.seed, options.solver.shards);
-    spdlog::info("second shot: {} local lines from {} face(s) holding {:.1f} % of the unshot power ({:.2f} s)",
+    std::string why;
+    if (store && accelerated) why = "first_shot.accelerate traces through the associated patches";
+    else if (store)
+      why = replay_stored_second_shot(options.store.dir / kStoredSecondShotFile, mesh, second, options.lines.seed, state,
+                                      record.second_shot);
+    if (!store || !why.empty()) {
+      if (store) spdlog::info("second shot traced: {}", why);
+      record.second_shot = second_shot(mesh, tracer.get(), state, second, options.lines.seed, options.solver.shards);
+      record.second_shot.traced_because = why;
+    }
+    spdlog::info("second shot: {} local lines from {} face(s) holding {:.1f} % of the unshot power ({}, {:.2f} s)",
                  record.second_shot.lines, record.second_shot.faces, 100.0 * record.second_shot.power_share,
-                 record.second_shot.seconds);
+                 record.second_shot.stored ? "read from the store" : "traced", record.second_shot.seconds);
   }
 }
 

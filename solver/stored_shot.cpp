@@ -8,12 +8,14 @@
 #include <chrono>
 #include <cstring>
 #include <fstream>
+#include <optional>
 
 #include "atomic_file.h"
 #include "box_store.h"
 #include "error.h"
 #include "hierarchical.h"
 #include "progress.h"
+#include "second_shot.h"
 #include "varint.h"
 #include "zstd_frame.h"
 
@@ -29,8 +31,21 @@ namespace {
 // raw and compressed sizes (two little-endian 64-bit words) and a zstd frame
 // with its checksum: first the plan, then the lines' fates, kBlocksPerFrame
 // blocks of kFirstShotBlock lines a frame; then the end magic.
-constexpr char kMagic[8] = {'M', 'P', 'F', 'S', 'H', 'O', 'T', '1'};
-constexpr char kEndMagic[8] = {'M', 'P', 'F', 'S', 'E', 'N', 'D', '1'};
+// The second shot's file has magics of its own ("MPSSHOT1", "MPSSEND1").
+struct KindTraits {
+  char magic[8], end[8];
+  const char* name;   // "first shot"
+  const char* which;  // "first"
+};
+constexpr KindTraits kKinds[2] = {
+    {{'M', 'P', 'F', 'S', 'H', 'O', 'T', '1'}, {'M', 'P', 'F', 'S', 'E', 'N', 'D', '1'}, "first shot", "first"},
+    {{'M', 'P', 'S', 'S', 'H', 'O', 'T', '1'}, {'M', 'P', 'S', 'S', 'E', 'N', 'D', '1'}, "second shot", "second"}};
+const KindTraits& traits(ShotKind kind) { return kKinds[kind == ShotKind::first ? 0 : 1]; }
+
+// The seed of the streams the lines of a shot drawn with lines.seed = `seed` come from.
+unsigned long long stream_seed(ShotKind kind, unsigned long long seed) {
+  return kind == ShotKind::first ? seed : second_shot_stream(seed);
+}
 // 1: independent points; 2: the plan ends with its sequence (1: Halton).
 constexpr uint64_t kVersion = 2;
 constexpr uint64_t kBlocksPerFrame = 64;
@@ -73,7 +88,7 @@ void write_frame(std::ostream& out, const std::string& raw, int level) {
   out.write(frame.data(), static_cast<std::streamsize>(frame.size()));
 }
 
-// The fates of the lines of blocks [first_block, ...) of one frame: per
+// The fates of the lines of blocks [first_block, ...) of one frame (`seed`: their streams'): per
 // block, per emitter's run of lines in it, the distinct codes in increasing
 // order, each as its step from the one before (the first from 0) and how
 // many lines had it, less one.
@@ -115,11 +130,12 @@ std::string encode_frame(const PatchMesh& mesh, const Tracer& tracer, const Firs
 
 class ShotReader {
  public:
-  ShotReader(const fs::path& path) : path_(path), in_(path, std::ios::binary) {
+  ShotReader(const fs::path& path, ShotKind kind) : path_(path), kind_(traits(kind)), in_(path, std::ios::binary) {
     if (!in_) fail("cannot be opened");
     size_ = fs::file_size(path);
     char magic[8];
-    if (!in_.read(magic, 8) || std::memcmp(magic, kMagic, 8) != 0) fail("not a first-shot file (wrong magic)");
+    if (!in_.read(magic, 8) || std::memcmp(magic, kind_.magic, 8) != 0)
+      fail(fmt::format("not a {}-shot file (wrong magic)", kind_.which));
   }
 
   // The next frame's raw bytes, at most `max_raw` of them.
@@ -139,14 +155,14 @@ class ShotReader {
 
   void expect_end() {
     char magic[8];
-    if (!in_.read(magic, 8) || std::memcmp(magic, kEndMagic, 8) != 0) fail("truncated (no end mark)");
+    if (!in_.read(magic, 8) || std::memcmp(magic, kind_.end, 8) != 0) fail("truncated (no end mark)");
     if (in_.peek() != std::char_traits<char>::eof()) fail("corrupted (bytes after the end mark)");
   }
 
   [[noreturn]] void fail(const std::string& what) const {
-    throw InputError(fmt::format("{}: {}; the store's first shot is damaged: run mpath-preprocess again, or delete "
-                                 "the file and mpath-solve traces the first shot itself",
-                                 path_.string(), what));
+    throw InputError(fmt::format("{}: {}; the store's {} is damaged: run mpath-preprocess again, or delete "
+                                 "the file and mpath-solve traces the {} itself",
+                                 path_.string(), what, kind_.name, kind_.name));
   }
 
  private:
@@ -159,6 +175,7 @@ class ShotReader {
   }
 
   fs::path path_;
+  const KindTraits& kind_;
   std::ifstream in_;
   uint64_t size_ = 0;
   std::string compressed_, raw_;
@@ -208,7 +225,11 @@ FirstShotPlan decode_plan(ShotReader& reader, size_t faces, unsigned long long& 
 }
 
 // Why a run's plan is not the stored one, in words.
-std::string plan_difference(const FirstShotPlan& run, const FirstShotPlan& stored) {
+std::string plan_difference(ShotKind kind, const FirstShotPlan& run, const FirstShotPlan& stored) {
+  if (kind == ShotKind::second)
+    return fmt::format("this run's second shot is not the store's ({} lines from {} faces, the store {} from {}: "
+                       "materials, emission, lights or second_shot.share changed since mpath-preprocess)",
+                       run.lines(), run.emitters.size(), stored.lines(), stored.emitters.size());
   if (run.emitters != stored.emitters || run.global_faces != stored.global_faces)
     return "this run's emitting faces are not the store's (emission or first_shot.mode changed since mpath-preprocess)";
   return fmt::format("this run gives its emitters other line counts ({} lines, the store {}: first_shot.lines or the "
@@ -216,67 +237,33 @@ std::string plan_difference(const FirstShotPlan& run, const FirstShotPlan& store
                      run.lines(), stored.lines());
 }
 
-}  // namespace
-
-uint64_t write_stored_shot(const fs::path& path, const PatchMesh& mesh, const Tracer& tracer, const FirstShotPlan& plan,
-                           unsigned long long seed, int zstd_level) {
-  AtomicFile file(path);
-  std::ostream& out = file.stream();
-  out.write(kMagic, 8);
-  write_frame(out, encode_plan(plan, seed, mesh.face_count()), zstd_level);
-  const uint64_t frames = frame_count(plan);
-  Progress progress("first shot for the store", plan.lines(), "lines", true);
-  uint64_t next = 0, written = 0;
-  tbb::parallel_pipeline(
-      16,
-      tbb::make_filter<void, uint64_t>(tbb::filter_mode::serial_in_order,
-                                       [&](tbb::flow_control& fc) -> uint64_t {
-                                         if (next >= frames) {
-                                           fc.stop();
-                                           return 0;
-                                         }
-                                         return next++;
-                                       }) &
-          tbb::make_filter<uint64_t, std::string>(tbb::filter_mode::parallel,
-                                                  [&](uint64_t f) {
-                                                    return encode_frame(mesh, tracer, plan, seed, f * kBlocksPerFrame);
-                                                  }) &
-          tbb::make_filter<std::string, void>(tbb::filter_mode::serial_in_order, [&](const std::string& raw) {
-            write_frame(out, raw, zstd_level);
-            const uint64_t lines = std::min(kBlocksPerFrame * kFirstShotBlock, plan.lines() - written);
-            written += lines;
-            progress.advance(lines);
-          }));
-  progress.finish();
-  out.write(kEndMagic, 8);
-  file.commit();
-  return fs::file_size(path);
-}
-
-FirstShotPlan read_stored_plan(const fs::path& path, size_t faces, unsigned long long& seed) {
-  ShotReader reader(path);
-  return decode_plan(reader, faces, seed);
-}
-
-std::string replay_stored_shot(const fs::path& path, const PatchMesh& mesh, const FirstShotPlan& plan,
-                               unsigned long long seed, RadiosityState& state, FirstShotStats& stats) {
-  if (!fs::exists(path)) return fmt::format("the store has no {} (made by an older mpath-preprocess)", kStoredShotFile);
-  const auto start = std::chrono::steady_clock::now();
-  ShotReader reader(path);
+// Opens `path` when it holds `plan` drawn with `seed` (the reader then at
+// the lines; `stored_halton`: the stored points' sequence), else says why not.
+std::string open_matching(const fs::path& path, ShotKind kind, const PatchMesh& mesh, const FirstShotPlan& plan,
+                          unsigned long long seed, std::optional<ShotReader>& reader, bool& stored_halton) {
+  if (!fs::exists(path))
+    return kind == ShotKind::first
+               ? fmt::format("the store has no {} (made by an older mpath-preprocess)", path.filename().string())
+               : fmt::format("the store has no {} (mpath-preprocess planned no second shot, or is older)",
+                             path.filename().string());
+  reader.emplace(path, kind);
   unsigned long long stored_seed = 0;
-  const FirstShotPlan stored = decode_plan(reader, mesh.face_count(), stored_seed);
-  if (stored_seed != seed) return fmt::format("the store's first shot was drawn with lines.seed = {}", stored_seed);
+  const FirstShotPlan stored = decode_plan(*reader, mesh.face_count(), stored_seed);
+  if (stored_seed != seed) return fmt::format("the store's {} was drawn with lines.seed = {}", traits(kind).name, stored_seed);
   // The store's points, Halton or independent, serve any run: both give
   // an unbiased shot (stores made before first_shot.sequence hold
   // independent ones).
   FirstShotPlan same = stored;
   same.halton = plan.halton;
-  if (!(same == plan)) return plan_difference(plan, stored);
-  stats.halton = stored.halton;
+  if (!(same == plan)) return plan_difference(kind, plan, stored);
+  stored_halton = stored.halton;
+  return "";
+}
 
-  // Decoded and checked in full before the state changes.
-  ShardAccumulator acc;
-  acc.reset(state.faces);
+// Reads the lines of `plan` and calls receive(e, code, lines) for each run
+// of `lines` lines of plan.emitters[e] that met `code`; then the end mark.
+template <typename Receive>
+void read_lines(ShotReader& reader, const PatchMesh& mesh, const FirstShotPlan& plan, const Receive& receive) {
   const uint32_t limit = code_limit(mesh.face_count());
   const uint64_t frames = frame_count(plan);
   size_t e = 0;
@@ -299,59 +286,179 @@ std::string replay_stored_shot(const fs::path& path, const PatchMesh& mesh, cons
           reader.fail(fmt::format("lines of frame {}: corrupted", f));
         code += step;
         seen += more + 1;
-        receive_emitter_lines(state, plan, e, static_cast<uint32_t>(code), more + 1, acc);
+        receive(e, static_cast<uint32_t>(code), more + 1);
       }
       line = run_end;
     }
     if (pos != raw.size()) reader.fail(fmt::format("lines of frame {}: corrupted", f));
   }
   reader.expect_end();
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+uint64_t write_stored_shot(const fs::path& path, const PatchMesh& mesh, const Tracer& tracer, const FirstShotPlan& plan,
+                           unsigned long long seed, int zstd_level, ShotKind kind) {
+  AtomicFile file(path);
+  std::ostream& out = file.stream();
+  out.write(traits(kind).magic, 8);
+  write_frame(out, encode_plan(plan, seed, mesh.face_count()), zstd_level);
+  const uint64_t frames = frame_count(plan);
+  const unsigned long long streams = stream_seed(kind, seed);
+  Progress progress(fmt::format("{} for the store", traits(kind).name), plan.lines(), "lines", true);
+  uint64_t next = 0, written = 0;
+  tbb::parallel_pipeline(
+      16,
+      tbb::make_filter<void, uint64_t>(tbb::filter_mode::serial_in_order,
+                                       [&](tbb::flow_control& fc) -> uint64_t {
+                                         if (next >= frames) {
+                                           fc.stop();
+                                           return 0;
+                                         }
+                                         return next++;
+                                       }) &
+          tbb::make_filter<uint64_t, std::string>(tbb::filter_mode::parallel,
+                                                  [&](uint64_t f) {
+                                                    return encode_frame(mesh, tracer, plan, streams, f * kBlocksPerFrame);
+                                                  }) &
+          tbb::make_filter<std::string, void>(tbb::filter_mode::serial_in_order, [&](const std::string& raw) {
+            write_frame(out, raw, zstd_level);
+            const uint64_t lines = std::min(kBlocksPerFrame * kFirstShotBlock, plan.lines() - written);
+            written += lines;
+            progress.advance(lines);
+          }));
+  progress.finish();
+  out.write(traits(kind).end, 8);
+  file.commit();
+  return fs::file_size(path);
+}
+
+FirstShotPlan read_stored_plan(const fs::path& path, size_t faces, unsigned long long& seed, ShotKind kind) {
+  ShotReader reader(path, kind);
+  return decode_plan(reader, faces, seed);
+}
+
+std::string replay_stored_shot(const fs::path& path, const PatchMesh& mesh, const FirstShotPlan& plan,
+                               unsigned long long seed, RadiosityState& state, FirstShotStats& stats) {
+  const auto start = std::chrono::steady_clock::now();
+  std::optional<ShotReader> reader;
+  bool halton = false;
+  if (std::string why = open_matching(path, ShotKind::first, mesh, plan, seed, reader, halton); !why.empty()) return why;
+  // Decoded and checked in full before the state changes.
+  ShardAccumulator acc;
+  acc.reset(state.faces);
+  read_lines(*reader, mesh, plan, [&](size_t e, uint32_t code, uint64_t lines) {
+    receive_emitter_lines(state, plan, e, code, lines, acc);
+  });
   leave_to_global_lines(plan, state);
   acc.lines = plan.lines();
   merge_received(std::vector<ShardAccumulator>{std::move(acc)}, state);
+  stats.halton = halton;
   stats.lines = plan.lines();
   stats.emitter_faces = plan.emitters.size();
   stats.global_emitter_faces = plan.global_faces.size();
   stats.stored = true;
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.seconds = seconds_since(start);
   return "";
 }
 
-StoredShotStats store_first_shot(const Options& options, const PreparedScene& prepared,
-                                 const std::vector<double>* crossings) {
+std::string replay_stored_second_shot(const fs::path& path, const PatchMesh& mesh, const FirstShotPlan& plan,
+                                      unsigned long long seed, RadiosityState& state, SecondShotStats& stats) {
   const auto start = std::chrono::steady_clock::now();
-  const PatchMesh& mesh = prepared.mesh;
-  const fs::path path = options.store.dir / kStoredShotFile;
+  std::optional<ShotReader> reader;
+  bool halton = false;
+  if (std::string why = open_matching(path, ShotKind::second, mesh, plan, seed, reader, halton); !why.empty()) return why;
+  std::vector<ShardAccumulator> acc(1);
+  acc[0].reset(state.faces);
+  const std::vector<double> per_line = second_shot_line_power(state, plan);
+  read_lines(*reader, mesh, plan, [&](size_t e, uint32_t code, uint64_t lines) {
+    receive_second_shot_lines(state, plan, per_line, e, code, lines, acc[0]);
+  });
+  acc[0].lines = plan.lines();
+  stats = finish_second_shot(plan, acc, state);
+  stats.halton = halton;
+  stats.stored = true;
+  stats.seconds = seconds_since(start);
+  return "";
+}
+
+namespace {
+
+// Keeps the file at `path` when it holds `plan` (every frame read into a
+// copy of `state`), else traces and writes it.
+StoredShotStats keep_or_write(const fs::path& path, ShotKind kind, const Options& options, const PatchMesh& mesh,
+                              const TracerOnDemand& tracer, const FirstShotPlan& plan, const RadiosityState& state) {
+  const auto start = std::chrono::steady_clock::now();
   StoredShotStats stats;
-  RadiosityState state = make_state(prepared.scene, mesh);
-  const std::vector<PointLight> lights = make_lights(options.scene.lights);
-  const FirstShotPlan plan =
-      (crossings ? plan_run_first_shot(options, mesh, state, *crossings, lights)
-                 : plan_run_first_shot(options, mesh, state, BoxStore(options, mesh).face_crossings(mesh.face_count()), lights))
-          .plan;
   stats.lines = plan.lines();
   if (fs::exists(path)) {
     // Kept only when a solve would read it: its plan, and every frame
     // checked (a damaged file is written again, as the solve's error says).
     try {
       RadiosityState scratch = state;
-      FirstShotStats read;
-      if (replay_stored_shot(path, mesh, plan, options.lines.seed, scratch, read).empty()) {
+      FirstShotStats first;
+      SecondShotStats second;
+      const std::string why = kind == ShotKind::first
+                                  ? replay_stored_shot(path, mesh, plan, options.lines.seed, scratch, first)
+                                  : replay_stored_second_shot(path, mesh, plan, options.lines.seed, scratch, second);
+      if (why.empty()) {
         stats.bytes = fs::file_size(path);
-        spdlog::info("{}: the first shot of this scene, written earlier, kept", path.string());
+        spdlog::info("{}: the {} of this scene, written earlier, kept", path.string(), traits(kind).name);
         return stats;
       }
     } catch (const InputError& e) {
       spdlog::warn("{}; writing it again", e.what());
     }
   }
-  const Tracer tracer(mesh);
-  stats.bytes = write_stored_shot(path, mesh, tracer, plan, options.lines.seed, options.store.zstd_level);
+  stats.bytes = write_stored_shot(path, mesh, tracer.get(), plan, options.lines.seed, options.store.zstd_level, kind);
   stats.written = true;
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  spdlog::info("{}: the first shot, {} local lines from {} emitting face(s), {:.2f} MB ({:.2f} s)", path.string(),
+  stats.seconds = seconds_since(start);
+  spdlog::info("{}: the {}, {} local lines from {} face(s), {:.2f} MB ({:.2f} s)", path.string(), traits(kind).name,
                plan.lines(), plan.emitters.size(), stats.bytes / 1e6, stats.seconds);
   return stats;
+}
+
+}  // namespace
+
+StoredShots store_shots(const Options& options, const PreparedScene& prepared, const StoreCrossings* crossings) {
+  const PatchMesh& mesh = prepared.mesh;
+  const fs::path dir = options.store.dir;
+  RadiosityState state = make_state(prepared.scene, mesh);
+  const std::vector<PointLight> lights = make_lights(options.scene.lights);
+  StoreCrossings counted;
+  if (!crossings) {
+    const BoxStore store(options, mesh);
+    counted = {store.face_crossings(mesh.face_count()), store.root_crossings(mesh.face_count())};
+    crossings = &counted;
+  }
+  const RunFirstShot run = plan_run_first_shot(options, mesh, state, crossings->all, lights);
+  TracerOnDemand tracer(mesh);
+  StoredShots shots;
+  shots.first = keep_or_write(dir / kStoredShotFile, ShotKind::first, options, mesh, tracer, run.plan, state);
+  // The state a solve of this store has before its second shot: the stored
+  // first shot read back, then the lights (solve.cpp, start_state).
+  const auto start = std::chrono::steady_clock::now();
+  FirstShotPlan plan;
+  if (options.second_shot.share > 0) {
+    FirstShotStats read;
+    if (const std::string why = replay_stored_shot(dir / kStoredShotFile, mesh, run.plan, options.lines.seed, state, read);
+        !why.empty())
+      throw std::runtime_error(fmt::format("{}: written and then not read back: {}", (dir / kStoredShotFile).string(), why));
+    if (!lights.empty()) shoot_lights(options, mesh, tracer.get(), state, lights, run.light_lines);
+    plan = plan_run_second_shot(options, state, crossings->root);
+  }
+  const fs::path path = dir / kStoredSecondShotFile;
+  if (plan.emitters.empty()) {
+    fs::remove(path);  // a solve plans none either
+    return shots;
+  }
+  shots.second = keep_or_write(path, ShotKind::second, options, mesh, tracer, plan, state);
+  shots.second.seconds = seconds_since(start);
+  return shots;
 }
 
 }  // namespace mpath

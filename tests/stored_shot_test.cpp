@@ -118,6 +118,98 @@ TEST(StoredShot, ReadingItGivesWhatTracingTheSamePlanGives) {
   }
 }
 
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// The state after a traced first shot of `budget` lines and the second shot
+// a store of `crossings` root crossings per face would plan after it.
+FirstShotPlan after_first_shot(const Prepared& s, const Tracer& tracer, long long budget, double crossings,
+                               unsigned long long seed, RadiosityState& state) {
+  state = s.state;
+  first_shot(s.mesh, tracer, state, plan_first_shot(s.mesh, s.state, budget, {}), seed, 2);
+  return plan_second_shot(state, budget / 4, std::vector<double>(s.mesh.face_count(), crossings), true);
+}
+
+// Read back, the stored second shot is the traced one (its lines' power from
+// the state before it, contacts' part left unshot), on random rooms whose
+// boxes stand on the floor; and it serves a run whose unshot power is the
+// same in other proportions per channel.
+TEST(StoredShot, ReadingTheSecondShotGivesWhatTracingItGives) {
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    TempDir dir;
+    Prepared s = prepared_room(random_room(seed), 0.02);
+    const Tracer tracer(s.mesh);
+    RadiosityState before;
+    const FirstShotPlan plan = after_first_shot(s, tracer, 30'000 + 5'003 * seed, 2.0 * seed, seed, before);
+    ASSERT_GT(plan.emitters.size(), 3u) << "seed " << seed;
+    ASSERT_LT(plan.emitters.size(), s.mesh.face_count()) << "seed " << seed << ": some faces left to the global lines";
+    const auto path = dir / kStoredSecondShotFile;
+    write_stored_shot(path, s.mesh, tracer, plan, seed, 3, ShotKind::second);
+    RadiosityState traced = before, stored = before;
+    const SecondShotStats t = second_shot(s.mesh, tracer, traced, plan, seed, 1 + static_cast<int>(seed % 3));
+    SecondShotStats r;
+    ASSERT_EQ(replay_stored_second_shot(path, s.mesh, plan, seed, stored, r), "") << "seed " << seed;
+    EXPECT_TRUE(r.stored);
+    EXPECT_FALSE(t.stored);
+    EXPECT_EQ(r.lines, plan.lines());
+    EXPECT_EQ(r.faces, t.faces);
+    EXPECT_DOUBLE_EQ(r.power_share, t.power_share);
+    expect_same_state(traced, stored, fmt::format("room {}", seed));
+    EXPECT_LT(std::abs(stored.energy_residual()), 1e-12 * stored.emitted_total()) << "emitted = absorbed + escaped + unshot";
+    // Not the first shot's file, nor read as one.
+    unsigned long long read_seed = 0;
+    EXPECT_EQ(read_stored_plan(path, s.mesh.face_count(), read_seed, ShotKind::second), plan);
+    EXPECT_EQ(read_seed, seed);
+    EXPECT_NE(message_of([&] { read_stored_plan(path, s.mesh.face_count(), read_seed); })
+                  .find("not a first-shot file (wrong magic)"),
+              std::string::npos);
+
+    // Another state's unshot power, the same faces and line shares: each
+    // channel's power scaled on its own reads back as tracing it.
+    RadiosityState other = before;
+    for (size_t f = 0; f < other.faces; ++f)
+      for (int c = 0; c < other.channels; ++c) other.unshot[other.at(f, c)] *= 1.0 + 0.5 * c;
+    RadiosityState other_traced = other;
+    second_shot(s.mesh, tracer, other_traced, plan, seed, 2);
+    ASSERT_EQ(replay_stored_second_shot(path, s.mesh, plan, seed, other, r), "");
+    expect_same_state(other_traced, other, fmt::format("room {}, other colours", seed));
+  }
+}
+
+// A second shot of another plan or seed is not read, and says why.
+TEST(StoredShot, AnotherSecondShotIsNotReadAndSaysWhy) {
+  TempDir dir;
+  Prepared s = prepared_room(random_room(7), 0.02);
+  const Tracer tracer(s.mesh);
+  RadiosityState before;
+  const FirstShotPlan plan = after_first_shot(s, tracer, 40'000, 4.0, 1, before);
+  const auto path = dir / kStoredSecondShotFile;
+  SecondShotStats stats;
+  RadiosityState state = before;
+  EXPECT_NE(replay_stored_second_shot(path, s.mesh, plan, 1, state, stats).find("planned no second shot"),
+            std::string::npos);
+  write_stored_shot(path, s.mesh, tracer, plan, 1, 3, ShotKind::second);
+  EXPECT_NE(replay_stored_second_shot(path, s.mesh, plan, 2, state, stats).find("second shot was drawn with lines.seed = 1"),
+            std::string::npos);
+  const FirstShotPlan more = plan_second_shot(before, 20'000, std::vector<double>(s.mesh.face_count(), 4.0), true);
+  ASSERT_NE(more, plan);
+  EXPECT_NE(replay_stored_second_shot(path, s.mesh, more, 1, state, stats).find("this run's second shot is not the store's"),
+            std::string::npos);
+  EXPECT_EQ(state.phi, before.phi);
+  EXPECT_EQ(state.unshot, before.unshot);
+  EXPECT_FALSE(stats.stored);
+  // The first shot's file under the second's name is damaged, not read.
+  write_stored_shot(path, s.mesh, tracer, plan, 1, 3);
+  const std::string why = message_of([&] { replay_stored_second_shot(path, s.mesh, plan, 1, state, stats); });
+  EXPECT_NE(why.find("not a second-shot file (wrong magic); the store's second shot is damaged"), std::string::npos) << why;
+}
+
 // A line's fate does not depend on how many shards trace it.
 TEST(StoredShot, TheTracedFirstShotIsTheSameOnAnyNumberOfShards) {
   Prepared s = prepared_room(random_room(11), 0.02);
@@ -175,15 +267,6 @@ TEST(StoredShot, AnotherPlanIsNotReadAndSaysWhy) {
   EXPECT_EQ(state.phi, s.state.phi);
   EXPECT_EQ(state.unshot, s.state.unshot);
   EXPECT_FALSE(stats.stored);
-}
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 // Every cut and every flipped bit that changes what the file says is an
@@ -328,6 +411,63 @@ TEST(StoredShot, TheSolveReadsThePreprocessorsFirstShot) {
   EXPECT_NE(refused.output.find("run mpath-preprocess again"), std::string::npos) << refused.output;
   ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common).exit_code, 0);
   EXPECT_EQ(test::read_file(dir / "store" / kStoredShotFile), good);
+}
+
+// End to end: mpath-preprocess writes second_shot.bin after the first shot,
+// the solve reads it and solves what it solves tracing it; a run with
+// another second_shot.share traces its own and says why; a damaged file is
+// refused by the solve and written again by the preprocess.
+TEST(StoredShot, TheSolveReadsThePreprocessorsSecondShot) {
+  TempDir dir;
+  const std::string config = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box.toml";
+  const std::string common = " -q lines.total=150000 store.chunk_lines=4096 solver.method=hierarchical output.png=false"
+                             " output.exr=false store.dir=" + (dir / "store").string();
+  const auto path = dir / "store" / kStoredSecondShotFile;
+  const auto solve = [&](const std::string& out, const std::string& more) {
+    const test::RunResult r = test::run(test::solve_bin() + " " + config + common + " output.dir=" + (dir / out).string() + more);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return nlohmann::json::parse(test::read_file(dir / out / "report.json"));
+  };
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common).exit_code, 0);
+  ASSERT_TRUE(std::filesystem::exists(path));
+  const auto stats = nlohmann::json::parse(test::read_file(dir / "store" / "preprocess.json"));
+  const uint64_t lines = stats["second_shot_lines"].get<uint64_t>();
+  EXPECT_NEAR(static_cast<double>(lines), 0.25 * 150'000, 100) << "second_shot.share's lines, at least one a face";
+  EXPECT_EQ(stats["second_shot_bytes"].get<uint64_t>(), std::filesystem::file_size(path));
+
+  const nlohmann::json read = solve("read", "");
+  EXPECT_TRUE(read["second_shot"]["from_store"].get<bool>()) << read["second_shot"];
+  EXPECT_EQ(read["second_shot"]["lines"].get<uint64_t>(), lines);
+  EXPECT_GT(read["second_shot"]["faces"].get<uint64_t>(), 0u);
+  EXPECT_LT(std::abs(read["energy"]["relative_residual"].get<double>()), 1e-9);
+
+  const nlohmann::json other = solve("other", " second_shot.share=0.5");
+  EXPECT_FALSE(other["second_shot"]["from_store"].get<bool>());
+  EXPECT_NE(other["second_shot"]["traced_because"].get<std::string>().find("second_shot.share changed"), std::string::npos)
+      << other["second_shot"];
+
+  std::filesystem::rename(path, dir / "second_shot.kept");
+  const nlohmann::json traced = solve("traced", "");
+  EXPECT_FALSE(traced["second_shot"]["from_store"].get<bool>());
+  EXPECT_NE(traced["second_shot"]["traced_because"].get<std::string>().find("has no second_shot.bin"), std::string::npos);
+  EXPECT_EQ(test::read_file(dir / "read" / "solution.ply"), test::read_file(dir / "traced" / "solution.ply"))
+      << "the solutions agree to the last bit of their floats";
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common).exit_code, 0);
+  const std::string good = test::read_file(dir / "second_shot.kept");
+  EXPECT_EQ(test::read_file(path), good) << "written again, the same";
+  std::string bad = good;
+  bad[bad.size() - 20] = static_cast<char>(bad[bad.size() - 20] ^ 0x10);
+  test::write_file(path, bad);
+  const test::RunResult refused =
+      test::run(test::solve_bin() + " " + config + common + " output.dir=" + (dir / "refused").string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.output.find("second_shot.bin"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("run mpath-preprocess again"), std::string::npos) << refused.output;
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common).exit_code, 0);
+  EXPECT_EQ(test::read_file(path), good);
+  // A preprocess with second_shot.share = 0 plans none and leaves no file.
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common + " second_shot.share=0").exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(path));
 }
 
 // Where every surface emits, first_shot.mode = "auto" leaves faces to the
