@@ -15,6 +15,7 @@ int Ranks::rank_ = 0;
 int Ranks::size_ = 1;
 bool Ranks::mpi_ = false;
 
+#ifdef MPATH_HAVE_MPI
 namespace {
 
 // A launcher (mpirun, srun with PMI or PMIx) started this process.
@@ -25,6 +26,7 @@ bool launched() {
 }
 
 }  // namespace
+#endif
 
 bool Ranks::built_with_mpi() {
 #ifdef MPATH_HAVE_MPI

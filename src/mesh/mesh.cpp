@@ -39,7 +39,7 @@ bool is_convex(const std::vector<Vec3>& p, const Vec3& n) {
 
 class MeshBuilder {
  public:
-  MeshBuilder(const Scene& scene, PatchMesh& mesh) : scene_(scene), mesh_(mesh) {}
+  explicit MeshBuilder(PatchMesh& mesh) : mesh_(mesh) {}
 
   void add_polygon(const Polygon& poly, int index, double eps) {
     const std::vector<Vec3> p = clean_polygon(poly.vertices, eps);
@@ -136,7 +136,6 @@ class MeshBuilder {
     }
   }
 
-  const Scene& scene_;
   PatchMesh& mesh_;
   Current current_{};
 };
@@ -262,7 +261,7 @@ PatchMesh build_mesh(const Scene& scene, double max_patch_area) {
     throw InputError(fmt::format("config key 'mesh.max_patch_area': {} gives about {:.3g} patches for {:.4g} square units "
                                  "of surface (at most {:.3g}); use a larger value",
                                  mesh.max_patch_area, expected_patches, total_area, static_cast<double>(kMaxPatches)));
-  MeshBuilder builder(scene, mesh);
+  MeshBuilder builder(mesh);
   for (size_t i = 0; i < scene.polygons.size(); ++i) builder.add_polygon(scene.polygons[i], static_cast<int>(i), eps);
 
   // Faces: all fronts, then the backs of two-sided patches.
