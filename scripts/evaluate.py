@@ -947,15 +947,28 @@ from this run's CSVs; what follows explains them, from the profiles in
   with dense lines now leaves by local lines in classic too. First runs:
   ROOM 1.96 -> 1.74x, BIG ROOM 1.56 -> 1.60x, OFFICE 3.93 -> 4.11x,
   office2 1.57 -> 1.45x, office3 3.58 -> 2.87x, soda 1.45 -> 1.42x.
-  Kept-store solves fell more (ROOM 10.07 -> 6.25x, BIG ROOM 7.69 ->
-  6.00x, office2 6.54 -> 4.97x, office3 12.60 -> 8.74x; OFFICE 12.31 ->
-  12.82x, soda 4.80 -> 4.92x): a kept-store solve now builds Embree's
-  BVH and traces the second shot every time, since the materials set it
-  (on soda 250,000 lines in 0.12 s), where before it traced nothing.
-  office2 is below both its targets in this run (next item). Stored in the
-  store by `mpath-preprocess`, as the first shot is, and replayed where
-  the materials match, the second shot would cost a kept-store solve
-  nothing; that is not done yet.
+  Kept-store solves fell more in that evaluation (ROOM 10.07 -> 6.25x,
+  BIG ROOM 7.69 -> 6.00x, office2 6.54 -> 4.97x, office3 12.60 ->
+  8.74x; OFFICE 12.31 -> 12.82x, soda 4.80 -> 4.92x): a kept-store solve
+  then built Embree's BVH and traced the second shot every time.
+- **The stored second shot** (since 7f78efc; docs/store-format.md,
+  "second_shot.bin"). `mpath-preprocess` now traces the second shot once
+  into the store, planned from the state its stored first shot and the
+  lights leave, and a solve whose materials, emission and lights give the
+  same plan reads it (every solve here does; `report.json`
+  `second_shot.from_store`). The errors are those of the evaluation
+  before to the last digit (the same lines, read instead of traced). The
+  kept-store solves' speed-ups at equal error, against the evaluation at
+  6c08a0c: ROOM 6.25 -> 10.23x, BIG ROOM 6.00 -> 9.26x, OFFICE 12.82 ->
+  13.97x, office2 4.97 -> 6.54x (the 5x target met again), office3 8.74 ->
+  11.84x, soda 4.92 -> 6.88x. A first run costs what it did: the
+  preprocess traces what the solve traced before (office2 at 2M lines, 6
+  pairs alternating the two ways: 1.40 and 1.41 s, medians of preprocess
+  and solve together); its speed-ups moved within the runs' noise (ROOM
+  1.74 -> 1.80x, BIG ROOM 1.60 -> 1.64x, OFFICE 4.11 -> 3.76x, office2
+  1.45 -> 1.38x, office3 2.87 -> 3.11x, soda 1.42 -> 1.74x; the host ran
+  classic 5-20 % slower in this run than in the last on every scene but
+  OFFICE, where it ran faster).
 - **Where the error lies.** The table under each scene splits each
   method's squared error by box. Wherever the hierarchy gives a small
   bright box lines of its own (a lamp in its shade: ROOM's, BIG ROOM's,
@@ -1008,9 +1021,14 @@ from this run's CSVs; what follows explains them, from the profiles in
   - What is left is a cheaper line: the preprocess would have to trace,
     count, encode and compress a line for clearly less than a classic pass
     traces and transports one.
-- **office2: both targets missed in this run** (first run 1.45x against
-  1.5x; kept-store solve 4.97x against 5x; 1.57x and 6.54x in the
-  evaluation before, at 0a89dc3, without the second shot).
+- **office2's first run: the target missed** (1.38x against 1.5x, its
+  budgets 1.08-1.87x; 1.45x in the evaluation at 6c08a0c and 1.57x at
+  0a89dc3, before the second shot). Its first-run speed-up falls with
+  lines (1.87x at 500,000, 1.08x at 4M): the error ratio at equal lines is
+  about one, so a first run gains only what classic's later passes cost
+  beyond the store's tracing and iterations, and at 4M lines the
+  preprocess alone (2.18 s) takes four fifths of classic's solve
+  (2.74 s).
   - 58 % of classic's squared error is in the room's walls, ceiling and
     desks (the root) and 31 % more in two wall slabs that get few or no
     lines of their own; the hierarchical runs err there 1.14-1.32 times as
@@ -1023,17 +1041,16 @@ from this run's CSVs; what follows explains them, from the profiles in
     weighs the trough's inside as if its power went by the global lines,
     and so gives its box more lines than they now pay for. The error ratio
     at equal lines is 1.00-1.10 (0.90-0.97 before).
-  - The kept-store solve traces the second shot every time (above).
-- **Kept-store solves.** A kept-store solve reads its first shot from the
-  store (`first_shot.bin`, traced once by `mpath-preprocess`) and traces
-  the second shot (above), so it is the transport loop over the stored
-  lines, one BVH build and the second shot's local lines, while classic
-  traces its first and second shots on every solve. soda's kept-store
-  solve (4.92x here, 4.80x in the evaluation before this one, 5.75x there
-  in CPU seconds) is the shortest of all: its fixed second (loading,
-  opening the store, the outputs) stays whatever the lines; these times
-  include each program's start-up, about 0.03 s with the exec that asks for
-  huge pages, and at 1M lines that is a sixth of a short solve.
+- **Kept-store solves.** A kept-store solve reads its first and second
+  shots from the store (`first_shot.bin`, `second_shot.bin`, traced once
+  by `mpath-preprocess`), so it is the transport loop over the stored
+  lines and little else (no BVH where every face is carried), while
+  classic traces its first and second shots on every solve. soda's
+  kept-store solve (6.88x here, 4.92x in the evaluation before this one)
+  is the shortest beside classic's: its fixed second (loading, opening the
+  store, the outputs) stays whatever the lines; these times include each
+  program's start-up, about 0.03 s with the exec that asks for huge pages,
+  and at 1M lines that is a sixth of a short solve.
 - **Scenes of one's own**: `python3 scripts/evaluate.py --scene
   NAME=CONFIG --docs DIR --work DIR` makes this page for other scenes.
   Run on RenderPark's graz office (office1/graz.mgf, 13,724 polygons) and
