@@ -372,6 +372,7 @@ std::string replay_stored_second_shot(const fs::path& path, const PatchMesh& mes
   std::optional<ShotReader> reader;
   bool halton = false;
   if (std::string why = open_matching(path, ShotKind::second, mesh, plan, seed, reader, halton); !why.empty()) return why;
+  // Decoded and checked in full before the state changes.
   std::vector<ShardAccumulator> acc(1);
   acc[0].reset(state.faces);
   const std::vector<double> per_line = second_shot_line_power(state, plan);
