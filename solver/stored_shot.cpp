@@ -29,7 +29,7 @@ namespace {
 
 // File layout (docs/store-format.md): the magic, then frames, each as its
 // raw and compressed sizes (two little-endian 64-bit words) and a zstd frame
-// with its checksum: first the plan, then the lines' fates, kBlocksPerFrame
+// with its checksum: first the plan, then the lines' fates, frame_blocks
 // blocks of kFirstShotBlock lines a frame; then the end magic.
 // The second shot's file has magics of its own ("MPSSHOT1", "MPSSEND1").
 struct KindTraits {
@@ -48,15 +48,23 @@ unsigned long long stream_seed(ShotKind kind, unsigned long long seed) {
 }
 // 1: independent points; 2: the plan ends with its sequence (1: Halton).
 constexpr uint64_t kVersion = 2;
-constexpr uint64_t kBlocksPerFrame = 64;
+constexpr uint64_t kMaxFrameBlocks = 64;
 
-uint64_t frame_count(const FirstShotPlan& plan) {
-  return (plan.blocks() + kBlocksPerFrame - 1) / kBlocksPerFrame;
+// Blocks a frame of `plan` holds: about a 64th of its blocks, at least one,
+// at most 64, so that the threads share even a short shot (with 64 blocks a
+// frame, as until December 2026, a 250,000-line second shot was one frame,
+// traced by one thread); recorded in the plan, so a reader takes any.
+uint64_t frame_blocks(const FirstShotPlan& plan) {
+  return std::clamp<uint64_t>((plan.blocks() + 63) / 64, 1, kMaxFrameBlocks);
+}
+
+uint64_t frame_count(const FirstShotPlan& plan, uint64_t blocks_a_frame) {
+  return (plan.blocks() + blocks_a_frame - 1) / blocks_a_frame;
 }
 
 std::string encode_plan(const FirstShotPlan& plan, unsigned long long seed, size_t faces) {
   std::string raw;
-  for (uint64_t v : {kVersion, static_cast<uint64_t>(seed), kFirstShotBlock, kBlocksPerFrame, uint64_t{faces},
+  for (uint64_t v : {kVersion, static_cast<uint64_t>(seed), kFirstShotBlock, frame_blocks(plan), uint64_t{faces},
                      uint64_t{plan.emitters.size()}})
     put_varint(raw, v);
   int previous = -1;
@@ -93,7 +101,7 @@ void write_frame(std::ostream& out, const std::string& raw, int level) {
 // order, each as its step from the one before (the first from 0) and how
 // many lines had it, less one.
 std::string encode_frame(const PatchMesh& mesh, const Tracer& tracer, const FirstShotPlan& plan,
-                         unsigned long long seed, uint64_t first_block) {
+                         unsigned long long seed, uint64_t first_block, uint64_t blocks_a_frame) {
   const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   const uint64_t blocks = plan.blocks();
   std::string raw;
@@ -112,7 +120,7 @@ std::string encode_frame(const PatchMesh& mesh, const Tracer& tracer, const Firs
     }
     codes.clear();
   };
-  for (uint64_t b = first_block; b < std::min(blocks, first_block + kBlocksPerFrame); ++b) {
+  for (uint64_t b = first_block; b < std::min(blocks, first_block + blocks_a_frame); ++b) {
     bool started = false;
     trace_first_shot_block(
         mesh, plan, seed, b,
@@ -181,7 +189,7 @@ class ShotReader {
   std::string compressed_, raw_;
 };
 
-FirstShotPlan decode_plan(ShotReader& reader, size_t faces, unsigned long long& seed) {
+FirstShotPlan decode_plan(ShotReader& reader, size_t faces, unsigned long long& seed, uint64_t* blocks_a_frame = nullptr) {
   // Two varints per face at most, and a few more.
   const std::string& raw = reader.frame(64 + 30 * (uint64_t{faces} + 1), "plan");
   const auto* data = reinterpret_cast<const unsigned char*>(raw.data());
@@ -194,8 +202,10 @@ FirstShotPlan decode_plan(ShotReader& reader, size_t faces, unsigned long long& 
   const uint64_t version = next(UINT64_MAX);
   if (version != 1 && version != kVersion) reader.fail("plan: written by another version of mpath");
   seed = next(UINT64_MAX);
-  if (next(UINT64_MAX) != kFirstShotBlock || next(UINT64_MAX) != kBlocksPerFrame)
-    reader.fail("plan: written by another version of mpath");
+  if (next(UINT64_MAX) != kFirstShotBlock) reader.fail("plan: written by another version of mpath");
+  const uint64_t frame = next(kMaxFrameBlocks);
+  if (frame == 0) reader.fail("plan: corrupted");
+  if (blocks_a_frame) *blocks_a_frame = frame;
   if (next(UINT64_MAX) != faces) reader.fail("plan: made for a mesh of another number of faces");
   FirstShotPlan plan;
   const uint64_t emitters = next(faces);
@@ -238,9 +248,11 @@ std::string plan_difference(ShotKind kind, const FirstShotPlan& run, const First
 }
 
 // Opens `path` when it holds `plan` drawn with `seed` (the reader then at
-// the lines; `stored_halton`: the stored points' sequence), else says why not.
+// the lines; `stored_halton`: the stored points' sequence; `blocks_a_frame`:
+// the file's frames' blocks), else says why not.
 std::string open_matching(const fs::path& path, ShotKind kind, const PatchMesh& mesh, const FirstShotPlan& plan,
-                          unsigned long long seed, std::optional<ShotReader>& reader, bool& stored_halton) {
+                          unsigned long long seed, std::optional<ShotReader>& reader, bool& stored_halton,
+                          uint64_t& blocks_a_frame) {
   if (!fs::exists(path))
     return kind == ShotKind::first
                ? fmt::format("the store has no {} (made by an older mpath-preprocess)", path.filename().string())
@@ -248,7 +260,7 @@ std::string open_matching(const fs::path& path, ShotKind kind, const PatchMesh& 
                              path.filename().string());
   reader.emplace(path, kind);
   unsigned long long stored_seed = 0;
-  const FirstShotPlan stored = decode_plan(*reader, mesh.face_count(), stored_seed);
+  const FirstShotPlan stored = decode_plan(*reader, mesh.face_count(), stored_seed, &blocks_a_frame);
   if (stored_seed != seed) return fmt::format("the store's {} was drawn with lines.seed = {}", traits(kind).name, stored_seed);
   // The store's points, Halton or independent, serve any run: both give
   // an unbiased shot (stores made before first_shot.sequence hold
@@ -263,13 +275,14 @@ std::string open_matching(const fs::path& path, ShotKind kind, const PatchMesh& 
 // Reads the lines of `plan` and calls receive(e, code, lines) for each run
 // of `lines` lines of plan.emitters[e] that met `code`; then the end mark.
 template <typename Receive>
-void read_lines(ShotReader& reader, const PatchMesh& mesh, const FirstShotPlan& plan, const Receive& receive) {
+void read_lines(ShotReader& reader, const PatchMesh& mesh, const FirstShotPlan& plan, uint64_t blocks_a_frame,
+                const Receive& receive) {
   const uint32_t limit = code_limit(mesh.face_count());
-  const uint64_t frames = frame_count(plan);
+  const uint64_t frames = frame_count(plan, blocks_a_frame);
   size_t e = 0;
   for (uint64_t f = 0; f < frames; ++f) {
-    const uint64_t lo = f * kBlocksPerFrame * kFirstShotBlock;
-    const uint64_t hi = std::min(plan.lines(), lo + kBlocksPerFrame * kFirstShotBlock);
+    const uint64_t lo = f * blocks_a_frame * kFirstShotBlock;
+    const uint64_t hi = std::min(plan.lines(), lo + blocks_a_frame * kFirstShotBlock);
     const std::string& raw = reader.frame((hi - lo) * 20, "lines");
     const auto* data = reinterpret_cast<const unsigned char*>(raw.data());
     size_t pos = 0;
@@ -307,7 +320,8 @@ uint64_t write_stored_shot(const fs::path& path, const PatchMesh& mesh, const Tr
   std::ostream& out = file.stream();
   out.write(traits(kind).magic, 8);
   write_frame(out, encode_plan(plan, seed, mesh.face_count()), zstd_level);
-  const uint64_t frames = frame_count(plan);
+  const uint64_t blocks_a_frame = frame_blocks(plan);
+  const uint64_t frames = frame_count(plan, blocks_a_frame);
   const unsigned long long streams = stream_seed(kind, seed);
   Progress progress(fmt::format("{} for the store", traits(kind).name), plan.lines(), "lines", true);
   uint64_t next = 0, written = 0;
@@ -323,11 +337,12 @@ uint64_t write_stored_shot(const fs::path& path, const PatchMesh& mesh, const Tr
                                        }) &
           tbb::make_filter<uint64_t, std::string>(tbb::filter_mode::parallel,
                                                   [&](uint64_t f) {
-                                                    return encode_frame(mesh, tracer, plan, streams, f * kBlocksPerFrame);
+                                                    return encode_frame(mesh, tracer, plan, streams,
+                                                                        f * blocks_a_frame, blocks_a_frame);
                                                   }) &
           tbb::make_filter<std::string, void>(tbb::filter_mode::serial_in_order, [&](const std::string& raw) {
             write_frame(out, raw, zstd_level);
-            const uint64_t lines = std::min(kBlocksPerFrame * kFirstShotBlock, plan.lines() - written);
+            const uint64_t lines = std::min(blocks_a_frame * kFirstShotBlock, plan.lines() - written);
             written += lines;
             progress.advance(lines);
           }));
@@ -347,11 +362,14 @@ std::string replay_stored_shot(const fs::path& path, const PatchMesh& mesh, cons
   const auto start = std::chrono::steady_clock::now();
   std::optional<ShotReader> reader;
   bool halton = false;
-  if (std::string why = open_matching(path, ShotKind::first, mesh, plan, seed, reader, halton); !why.empty()) return why;
+  uint64_t blocks_a_frame = 0;
+  if (std::string why = open_matching(path, ShotKind::first, mesh, plan, seed, reader, halton, blocks_a_frame);
+      !why.empty())
+    return why;
   // Decoded and checked in full before the state changes.
   ShardAccumulator acc;
   acc.reset(state.faces);
-  read_lines(*reader, mesh, plan, [&](size_t e, uint32_t code, uint64_t lines) {
+  read_lines(*reader, mesh, plan, blocks_a_frame, [&](size_t e, uint32_t code, uint64_t lines) {
     receive_emitter_lines(state, plan, e, code, lines, acc);
   });
   leave_to_global_lines(plan, state);
@@ -371,12 +389,15 @@ std::string replay_stored_second_shot(const fs::path& path, const PatchMesh& mes
   const auto start = std::chrono::steady_clock::now();
   std::optional<ShotReader> reader;
   bool halton = false;
-  if (std::string why = open_matching(path, ShotKind::second, mesh, plan, seed, reader, halton); !why.empty()) return why;
+  uint64_t blocks_a_frame = 0;
+  if (std::string why = open_matching(path, ShotKind::second, mesh, plan, seed, reader, halton, blocks_a_frame);
+      !why.empty())
+    return why;
   // Decoded and checked in full before the state changes.
   std::vector<ShardAccumulator> acc(1);
   acc[0].reset(state.faces);
   const std::vector<double> per_line = second_shot_line_power(state, plan);
-  read_lines(*reader, mesh, plan, [&](size_t e, uint32_t code, uint64_t lines) {
+  read_lines(*reader, mesh, plan, blocks_a_frame, [&](size_t e, uint32_t code, uint64_t lines) {
     receive_second_shot_lines(state, plan, per_line, e, code, lines, acc[0]);
   });
   acc[0].lines = plan.lines();

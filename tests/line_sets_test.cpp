@@ -283,12 +283,11 @@ TEST(LineSets, PartialPassesDoNotStallOnFineMeshes) {
     EXPECT_LT(std::fabs(a.state.energy_residual()) / a.state.emitted_total(), 1e-10);
     // The same stored lines: the two answers differ by the passes' plans alone.
     ASSERT_EQ(a.mesh.face_count(), f.mesh.face_count());
-    double area = 0, diff = 0, total = 0;
+    double diff = 0, total = 0;
     for (size_t k = 0; k < a.mesh.face_count(); ++k) {
       const double w = a.mesh.face_area(static_cast<int>(k));
       const double ra = a.state.radiosity(a.mesh, k)[0] - a.state.face_exitance(k)[0];
       const double rf = f.state.radiosity(f.mesh, k)[0] - f.state.face_exitance(k)[0];
-      area += w;
       diff += w * (ra - rf);
       total += w * rf;
     }
