@@ -245,7 +245,7 @@ linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, co
 // `crossings`: counted by this run over every line of the store (null: the
 // store is opened to count them).
 void add_shots(const Options& options, const PreparedScene& prepared, PreprocessStats& stats,
-                    const StoreCrossings* crossings) {
+               const StoreCrossings* crossings) {
   if (options.first_shot.accelerate) return;
   const StoredShots shots = store_shots(options, prepared, crossings);
   stats.first_shot_lines = shots.first.lines;

@@ -109,6 +109,22 @@ long long chosen_first_shot_lines(const Options& options, const Scene& scene, co
   return lines;
 }
 
+// A shot of a kept store is read, not traced, when this run would trace the
+// same lines (stored_shot.h): `read` reads it or returns why not, `trace`
+// traces it. Returns why it was traced ("" when read, and without a store).
+template <typename Read, typename Trace>
+std::string read_or_trace(const BoxStore* store, bool accelerated, const char* shot, const Read& read,
+                          const Trace& trace) {
+  std::string why;
+  if (store && accelerated) why = "first_shot.accelerate traces through the associated patches";
+  else if (store) why = read();
+  if (!store || !why.empty()) {
+    if (store) spdlog::info("{} traced: {}", shot, why);
+    trace();
+  }
+  return why;
+}
+
 // Restores the state from the checkpoint (--resume) or runs the first shot.
 void start_state(const Options& run_options, const SolveFlags& flags, const Scene& scene, const PatchMesh& mesh,
                  const TracerOnDemand& tracer, const BoxStore* store, const Checkpoint& checkpoint,
@@ -127,42 +143,36 @@ void start_state(const Options& run_options, const SolveFlags& flags, const Scen
   std::unique_ptr<SubsceneNearest> accelerated;
   if (options.first_shot.accelerate && store && store->box_count() > 1 && !store->line_sets())
     accelerated = std::make_unique<SubsceneNearest>(mesh, *store);
-  // A kept store's first shot is read, not traced, when this run would
-  // trace the same lines (stored_shot.h).
-  std::string traced_because;
-  if (store && accelerated) traced_because = "first_shot.accelerate traces through the associated patches";
-  else if (store)
-    traced_because = replay_stored_shot(options.store.dir / kStoredShotFile, mesh, shot.plan, options.lines.seed, state,
-                                        record.shot);
-  if (!store || !traced_because.empty()) {
-    if (store) spdlog::info("first shot traced: {}", traced_because);
-    record.shot = first_shot(mesh, tracer.get(), state, shot.plan, options.lines.seed, options.solver.shards,
-                             accelerated.get());
-    record.shot.traced_because = traced_because;
-  } else {
+  record.shot.traced_because = read_or_trace(
+      store, accelerated != nullptr, "first shot",
+      [&] {
+        return replay_stored_shot(options.store.dir / kStoredShotFile, mesh, shot.plan, options.lines.seed, state,
+                                  record.shot);
+      },
+      [&] {
+        record.shot = first_shot(mesh, tracer.get(), state, shot.plan, options.lines.seed, options.solver.shards,
+                                 accelerated.get());
+      });
+  if (record.shot.stored)
     spdlog::info("first shot: {} local lines read from the store ({:.2f} s)", record.shot.lines, record.shot.seconds);
-  }
-  if (!lights.empty()) {
-    const std::vector<uint64_t> shot_lines = shoot_lights(options, mesh, tracer.get(), state, lights, shot.light_lines);
-    for (size_t l = 0; l < lights.size(); ++l) {
-      record.shot.lines += shot_lines[l];
-      record.lights[l].first_shot_lines = shot_lines[l];
-    }
+  const std::vector<uint64_t> shot_lines = shoot_lights(options, mesh, tracer.get(), state, lights, shot.light_lines);
+  for (size_t l = 0; l < lights.size(); ++l) {
+    record.shot.lines += shot_lines[l];
+    record.lights[l].first_shot_lines = shot_lines[l];
   }
   // The faces the first shot left brightest shoot their power with local
-  // lines of their own (second_shot.h).
-  // A kept store's is read where its plan is this run's.
+  // lines of their own (second_shot.h); read like the first shot.
   if (const FirstShotPlan second = plan_run_second_shot(options, mesh, state, store); !second.emitters.empty()) {
-    std::string why;
-    if (store && accelerated) why = "first_shot.accelerate traces through the associated patches";
-    else if (store)
-      why = replay_stored_second_shot(options.store.dir / kStoredSecondShotFile, mesh, second, options.lines.seed, state,
-                                      record.second_shot);
-    if (!store || !why.empty()) {
-      if (store) spdlog::info("second shot traced: {}", why);
-      record.second_shot = second_shot(mesh, tracer.get(), state, second, options.lines.seed, options.solver.shards);
-      record.second_shot.traced_because = why;
-    }
+    record.second_shot.traced_because = read_or_trace(
+        store, accelerated != nullptr, "second shot",
+        [&] {
+          return replay_stored_second_shot(options.store.dir / kStoredSecondShotFile, mesh, second, options.lines.seed,
+                                           state, record.second_shot);
+        },
+        [&] {
+          record.second_shot =
+              second_shot(mesh, tracer.get(), state, second, options.lines.seed, options.solver.shards);
+        });
     spdlog::info("second shot: {} local lines from {} face(s) holding {:.1f} % of the unshot power ({}, {:.2f} s)",
                  record.second_shot.lines, record.second_shot.faces, 100.0 * record.second_shot.power_share,
                  record.second_shot.stored ? "read from the store" : "traced", record.second_shot.seconds);

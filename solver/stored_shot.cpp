@@ -308,6 +308,25 @@ void read_lines(ShotReader& reader, const PatchMesh& mesh, const FirstShotPlan& 
   reader.expect_end();
 }
 
+// Reads the lines of `path` into `acc` (reset to `faces` faces, its line
+// count set) when the file holds `plan` drawn with `seed`, calling
+// receive(e, code, lines, acc) for each run of lines, and returns ""; else
+// returns why not and reads nothing. `halton`: the stored points' sequence.
+template <typename Receive>
+std::string read_matching(const fs::path& path, ShotKind kind, const PatchMesh& mesh, const FirstShotPlan& plan,
+                          unsigned long long seed, size_t faces, ShardAccumulator& acc, bool& halton,
+                          const Receive& receive) {
+  std::optional<ShotReader> reader;
+  uint64_t blocks_a_frame = 0;
+  if (std::string why = open_matching(path, kind, mesh, plan, seed, reader, halton, blocks_a_frame); !why.empty())
+    return why;
+  acc.reset(faces);
+  read_lines(*reader, mesh, plan, blocks_a_frame,
+             [&](size_t e, uint32_t code, uint64_t lines) { receive(e, code, lines, acc); });
+  acc.lines = plan.lines();
+  return "";
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -360,21 +379,17 @@ FirstShotPlan read_stored_plan(const fs::path& path, size_t faces, unsigned long
 std::string replay_stored_shot(const fs::path& path, const PatchMesh& mesh, const FirstShotPlan& plan,
                                unsigned long long seed, RadiosityState& state, FirstShotStats& stats) {
   const auto start = std::chrono::steady_clock::now();
-  std::optional<ShotReader> reader;
+  // Decoded and checked in full before the state changes.
+  std::vector<ShardAccumulator> acc(1);
   bool halton = false;
-  uint64_t blocks_a_frame = 0;
-  if (std::string why = open_matching(path, ShotKind::first, mesh, plan, seed, reader, halton, blocks_a_frame);
+  if (std::string why = read_matching(path, ShotKind::first, mesh, plan, seed, state.faces, acc[0], halton,
+                                      [&](size_t e, uint32_t code, uint64_t lines, ShardAccumulator& a) {
+                                        receive_emitter_lines(state, plan, e, code, lines, a);
+                                      });
       !why.empty())
     return why;
-  // Decoded and checked in full before the state changes.
-  ShardAccumulator acc;
-  acc.reset(state.faces);
-  read_lines(*reader, mesh, plan, blocks_a_frame, [&](size_t e, uint32_t code, uint64_t lines) {
-    receive_emitter_lines(state, plan, e, code, lines, acc);
-  });
   leave_to_global_lines(plan, state);
-  acc.lines = plan.lines();
-  merge_received(std::vector<ShardAccumulator>{std::move(acc)}, state);
+  merge_received(acc, state);
   stats.halton = halton;
   stats.lines = plan.lines();
   stats.emitter_faces = plan.emitters.size();
@@ -387,20 +402,16 @@ std::string replay_stored_shot(const fs::path& path, const PatchMesh& mesh, cons
 std::string replay_stored_second_shot(const fs::path& path, const PatchMesh& mesh, const FirstShotPlan& plan,
                                       unsigned long long seed, RadiosityState& state, SecondShotStats& stats) {
   const auto start = std::chrono::steady_clock::now();
-  std::optional<ShotReader> reader;
-  bool halton = false;
-  uint64_t blocks_a_frame = 0;
-  if (std::string why = open_matching(path, ShotKind::second, mesh, plan, seed, reader, halton, blocks_a_frame);
-      !why.empty())
-    return why;
   // Decoded and checked in full before the state changes.
   std::vector<ShardAccumulator> acc(1);
-  acc[0].reset(state.faces);
+  bool halton = false;
   const std::vector<double> per_line = second_shot_line_power(state, plan);
-  read_lines(*reader, mesh, plan, blocks_a_frame, [&](size_t e, uint32_t code, uint64_t lines) {
-    receive_second_shot_lines(state, plan, per_line, e, code, lines, acc[0]);
-  });
-  acc[0].lines = plan.lines();
+  if (std::string why = read_matching(path, ShotKind::second, mesh, plan, seed, state.faces, acc[0], halton,
+                                      [&](size_t e, uint32_t code, uint64_t lines, ShardAccumulator& a) {
+                                        receive_second_shot_lines(state, plan, per_line, e, code, lines, a);
+                                      });
+      !why.empty())
+    return why;
   stats = finish_second_shot(plan, acc, state);
   stats.halton = halton;
   stats.stored = true;
@@ -470,7 +481,7 @@ StoredShots store_shots(const Options& options, const PreparedScene& prepared, c
     if (const std::string why = replay_stored_shot(dir / kStoredShotFile, mesh, run.plan, options.lines.seed, state, read);
         !why.empty())
       throw std::runtime_error(fmt::format("{}: written and then not read back: {}", (dir / kStoredShotFile).string(), why));
-    if (!lights.empty()) shoot_lights(options, mesh, tracer.get(), state, lights, run.light_lines);
+    shoot_lights(options, mesh, tracer.get(), state, lights, run.light_lines);
     plan = plan_run_second_shot(options, state, crossings->root);
   }
   const fs::path path = dir / kStoredSecondShotFile;
