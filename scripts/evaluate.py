@@ -1038,9 +1038,12 @@ from this run's CSVs; what follows explains them, from the profiles in
     squared error before the second shot, now holds 11 % (its power leaves
     by local lines in both methods), and its box still cuts that to 0.37 of
     classic's. The pilot's budget does not know of the second shot: it
-    weighs the trough's inside as if its power went by the global lines,
-    and so gives its box more lines than they now pay for. The error ratio
-    at equal lines is 1.00-1.10 (0.90-0.97 before).
+    weighs the trough's inside as if its power went by the global lines.
+    The box has 5.7 % of the lines at 4M, so the root could gain at most
+    that many (its error 3 % less); a pilot taught the second shot
+    (docs/performance.md, "Second-shot budget") moved ROOM's and BIG
+    ROOM's budgets by 1.5-5 points and gained nothing there. The error
+    ratio at equal lines is 1.00-1.10 (0.90-0.97 before).
 - **Kept-store solves.** A kept-store solve reads its first and second
   shots from the store (`first_shot.bin`, `second_shot.bin`, traced once
   by `mpath-preprocess`), so it is the transport loop over the stored
