@@ -1,10 +1,12 @@
-// libFuzzer target for the store's first and second shots (first_shot.bin,
-// second_shot.bin). The input is read as each of them for a small fixed
-// scene (a closed room of 6 faces with a cube of 6 in it, every face
-// emitting), with the plan the file itself records, so that its frames of
-// lines are read too: anything but a file the writer made must end in
-// InputError. Its bytes also choose plans of both shots that are written and
-// read back, which must give what tracing them gives.
+// libFuzzer target for the store's first, second and lights' shots
+// (first_shot.bin, second_shot.bin, lights_shot.bin). The input is read as
+// each of them for a small fixed scene (a closed room of 6 faces with a cube
+// of 6 in it, every face emitting, and a point source above the cube), the
+// face shots with the plan the file itself records and the lights' with the
+// fixed light's (as its seed file was written), so that their frames of lines
+// are read too: anything but a file the writer made must end in InputError.
+// Its bytes also choose plans of all three that are written and read back,
+// which must give what tracing them gives.
 #include <cmath>
 #include <cstring>
 
@@ -17,6 +19,9 @@
 using namespace mpath;
 
 namespace {
+
+constexpr uint64_t kLightLines = 5000;
+constexpr unsigned long long kLightSeed = 7;
 
 // A closed unit room (faces inward) and a cube in it (faces outward), all
 // of one grey that emits.
@@ -56,6 +61,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     (void)replay_stored_shot(path, mesh, plan, seed, state, stats);
   } catch (const InputError&) {
   }
+  // The fixed light, its lines and seed: those of the seed file valid_lights.bin.
+  static const std::vector<PointLight> lights = [] {
+    LightOptions o;
+    o.position = {0.5, 0.5, 0.8};
+    o.intensity_cd = 10;
+    return std::vector<PointLight>{make_light(o)};
+  }();
+  try {  // as the lights' shot
+    RadiosityState state = fresh;
+    LightsShotStats stats;
+    (void)replay_stored_lights(path, mesh, lights, {kLightLines}, kLightSeed, state, stats);
+  } catch (const InputError&) {
+  }
   try {  // as a second shot, after a first shot
     static const RadiosityState after = [&] {
       RadiosityState state = fresh;
@@ -93,6 +111,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return true;
   };
   if (!same(traced, read)) __builtin_trap();
+
+  // The light's shot of as many lines.
+  {
+    const std::vector<uint64_t> light_lines{static_cast<uint64_t>(lines)};
+    write_stored_lights(written, mesh, tracer, lights, light_lines, seed, 1);
+    RadiosityState lit_traced = fresh, lit_read = fresh;
+    Options o;
+    o.lines.seed = seed;
+    o.solver.shards = 1;
+    shoot_lights(o, mesh, tracer, lit_traced, lights, {lines});
+    LightsShotStats light_stats;
+    if (!replay_stored_lights(written, mesh, lights, light_lines, seed, lit_read, light_stats).empty()) __builtin_trap();
+    if (!same(lit_traced, lit_read)) __builtin_trap();
+  }
 
   // The second shot that follows, of as many lines, every face taking part
   // (no crossings) or those the input's crossings leave.

@@ -254,6 +254,9 @@ void add_shots(const Options& options, const PreparedScene& prepared, Preprocess
   stats.second_shot_lines = shots.second.lines;
   stats.second_shot_bytes = shots.second.bytes;
   stats.second_shot_seconds = shots.second.seconds;
+  stats.lights_shot_lines = shots.lights.lines;
+  stats.lights_shot_bytes = shots.lights.bytes;
+  stats.lights_shot_seconds = shots.lights.seconds;
 }
 
 }  // namespace
@@ -361,6 +364,9 @@ PreprocessStats preprocess_on_threads(const Options& options, const ShardSpec& s
                                  {"second_shot_seconds", stats.second_shot_seconds},
                                  {"second_shot_lines", stats.second_shot_lines},
                                  {"second_shot_bytes", stats.second_shot_bytes},
+                                 {"lights_shot_seconds", stats.lights_shot_seconds},
+                                 {"lights_shot_lines", stats.lights_shot_lines},
+                                 {"lights_shot_bytes", stats.lights_shot_bytes},
                                  {"trace_seconds", stats.trace_seconds}, {"encode_seconds", stats.encode_seconds},
                                  {"compress_seconds", stats.compress_seconds}, {"write_seconds", stats.write_seconds},
                                  {"wall_seconds", stats.wall_seconds}, {"threads", threads},

@@ -29,6 +29,9 @@ struct PreprocessStats {
   // The same for the second shot (second_shot.bin).
   uint64_t second_shot_lines = 0, second_shot_bytes = 0;
   double second_shot_seconds = 0;
+  // The same for the lights' shot (lights_shot.bin).
+  uint64_t lights_shot_lines = 0, lights_shot_bytes = 0;
+  double lights_shot_seconds = 0;
   bool skipped = false;  // the shard's file was already finished and verified
   bool manifest_written = false;
 };

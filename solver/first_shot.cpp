@@ -166,34 +166,49 @@ FirstShotStats first_shot(const PatchMesh& mesh, const Tracer& tracer, Radiosity
                     accelerated);
 }
 
+unsigned long long light_seed(unsigned long long seed, size_t light) { return seed + 7919 * (light + 1); }
+
+uint64_t light_line_count(const PointLight& light, long long lines) {
+  return light.power() > 0 ? static_cast<uint64_t>(std::max<long long>(lines, 1)) : 0;
+}
+
+// The Halton points' shift: the light's stream, past the shards' indices.
+ShiftedHalton light_points(unsigned long long light_seed) {
+  return ShiftedHalton(make_rng(light_seed, kLightStream, kLightShiftIndex));
+}
+
+uint32_t light_line_outcome(const PatchMesh& mesh, const Tracer& tracer, const PointLight& light, const double u[3]) {
+  const Vec3 dir = light.sample(u[0], u[1], u[2]);
+  const NearestHit hit = tracer.nearest(light.options.position, dir, 0.0, 4.0 * mesh.bounds.diagonal() + 1.0);
+  return hit.patch < 0 ? kEscaped : met_code(mesh.face_met(hit.patch, dir), false);
+}
+
+void receive_light_lines(const RadiosityState& state, const PointLight& light, uint64_t count, uint32_t code,
+                         uint64_t lines, ShardAccumulator& acc) {
+  // White: the same radiant power in every channel.
+  const double part = light.power() / static_cast<double>(count) * static_cast<double>(lines);
+  const double power[3] = {part, part, part};
+  receive_outcome(state, -1, code, power, acc);
+}
+
 uint64_t shoot_light(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, const PointLight& light,
                      long long lines, unsigned long long seed, int shards, bool halton) {
-  const int ch = state.channels;
-  const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
-  const double power = light.power();  // white: the same radiant power in every channel
-  for (int c = 0; c < ch; ++c) state.energy.emitted[c] += power;
-  const uint64_t n = power > 0 ? static_cast<uint64_t>(std::max<long long>(lines, 1)) : 0;
+  const double power = light.power();
+  for (int c = 0; c < state.channels; ++c) state.energy.emitted[c] += power;
+  const uint64_t n = light_line_count(light, lines);
   if (n == 0) return 0;
-  // The Halton points' shift: the light's stream, past the shards' indices.
-  const ShiftedHalton points(make_rng(seed, kLightStream, kLightShiftIndex));
+  const ShiftedHalton points = light_points(seed);
   std::vector<ShardAccumulator> acc(shards);
   run_shards(acc, [&](int s) { acc[s].reset(state.faces); }, [&](int s) {
     ShardAccumulator& a = acc[s];
     Rng rng = make_rng(seed, kLightStream, static_cast<unsigned long long>(s));
-    const double share[3] = {power / static_cast<double>(n), power / static_cast<double>(n), power / static_cast<double>(n)};
     for (uint64_t k = n * s / shards; k < n * (s + 1) / shards; ++k) {
       double u[4];
       if (halton) points.point(k, u);
       else
         for (int i = 0; i < 3; ++i) u[i] = uniform(rng);
-      const Vec3 dir = light.sample(u[0], u[1], u[2]);
-      const NearestHit hit = tracer.nearest(light.options.position, dir, 0.0, tfar);
+      receive_light_lines(state, light, n, light_line_outcome(mesh, tracer, light, u), 1, a);
       ++a.lines;
-      if (hit.patch < 0) {
-        for (int c = 0; c < ch; ++c) a.escaped[c] += share[c];
-        continue;
-      }
-      receive(state, mesh.face_met(hit.patch, dir), share, a);
     }
   });
   merge_received(acc, state);
@@ -205,7 +220,7 @@ std::vector<uint64_t> shoot_lights(const Options& options, const PatchMesh& mesh
                                    const std::vector<long long>& light_lines) {
   std::vector<uint64_t> shot(lights.size());
   for (size_t l = 0; l < lights.size(); ++l)
-    shot[l] = shoot_light(mesh, tracer, state, lights[l], light_lines[l], options.lines.seed + 7919 * (l + 1),
+    shot[l] = shoot_light(mesh, tracer, state, lights[l], light_lines[l], light_seed(options.lines.seed, l),
                           options.solver.shards, options.first_shot.halton());
   return shot;
 }

@@ -236,6 +236,27 @@ std::vector<uint64_t> shoot_lights(const Options& options, const PatchMesh& mesh
                                    RadiosityState& state, const std::vector<PointLight>& lights,
                                    const std::vector<long long>& light_lines);
 
+// A run's lights' shot, as its report gives it.
+struct LightsShotStats {
+  uint64_t lines = 0;
+  double seconds = 0;
+  bool stored = false;         // read from the store's lights_shot.bin instead of traced
+  std::string traced_because;  // with a store: why its lights' shot was not used
+};
+
+// The parts of shoot_light that a stored lights' shot (stored_shot.h)
+// shares: the seed of light l's streams (lines.seed = `seed`); the lines
+// shoot_light shoots for `lines` asked (none for a light of no power); the
+// Halton points of the light's lines; what line k met (kEscaped, or
+// met_code of the face, never a contact: a point touches nothing); and
+// adding `lines` of the light's `count` lines that met `code`.
+unsigned long long light_seed(unsigned long long seed, size_t light);
+uint64_t light_line_count(const PointLight& light, long long lines);
+ShiftedHalton light_points(unsigned long long light_seed);
+uint32_t light_line_outcome(const PatchMesh& mesh, const Tracer& tracer, const PointLight& light, const double u[3]);
+void receive_light_lines(const RadiosityState& state, const PointLight& light, uint64_t count, uint32_t code,
+                         uint64_t lines, ShardAccumulator& acc);
+
 // Traces `plan` (its global faces left to the global lines). `accelerated`:
 // find nearest hits through the subscenes' associated patches
 // (first_shot.accelerate) instead of the whole scene's tracer.

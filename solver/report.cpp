@@ -126,6 +126,8 @@ json solve_report(const Options& options, const PreparedScene& prepared, const R
                        {"power_share", r.second_shot.power_share}, {"seconds", r.second_shot.seconds},
                        {"sequence", r.second_shot.halton ? "halton" : "random"},
                        {"from_store", r.second_shot.stored}, {"traced_because", r.second_shot.traced_because}}},
+      {"lights_shot", {{"lines", r.lights_shot.lines}, {"seconds", r.lights_shot.seconds},
+                       {"from_store", r.lights_shot.stored}, {"traced_because", r.lights_shot.traced_because}}},
       {"lights", [&] {
          json lights = json::array();
          for (const SolveRecord::Light& l : r.lights)

@@ -31,6 +31,7 @@ struct SolveRecord {
   SolveTimings timings;
   FirstShotStats shot;
   SecondShotStats second_shot;
+  LightsShotStats lights_shot;
   // How the first shot's lines were set when first_shot.lines is 0: "pilot"
   // (this run's), "store" (the store's first shot), else "config".
   std::string shot_lines_from = "config";

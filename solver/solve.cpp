@@ -155,11 +155,30 @@ void start_state(const Options& run_options, const SolveFlags& flags, const Scen
       });
   if (record.shot.stored)
     spdlog::info("first shot: {} local lines read from the store ({:.2f} s)", record.shot.lines, record.shot.seconds);
-  const std::vector<uint64_t> shot_lines = shoot_lights(options, mesh, tracer.get(), state, lights, shot.light_lines);
+  // The lights' shot: read like the first shot where the store holds it.
+  std::vector<uint64_t> shot_lines;
+  for (size_t l = 0; l < lights.size(); ++l) shot_lines.push_back(light_line_count(lights[l], shot.light_lines[l]));
+  if (!lights.empty())
+    record.lights_shot.traced_because = read_or_trace(
+        store, false, "lights' shot",
+        [&] {
+          return replay_stored_lights(options.store.dir / kStoredLightsFile, mesh, lights, shot_lines,
+                                      options.lines.seed, state, record.lights_shot);
+        },
+        [&] {
+          const auto start = clock::now();
+          shot_lines = shoot_lights(options, mesh, tracer.get(), state, lights, shot.light_lines);
+          record.lights_shot.seconds = seconds_since(start);
+        });
+  record.lights_shot.lines = 0;
   for (size_t l = 0; l < lights.size(); ++l) {
     record.shot.lines += shot_lines[l];
+    record.lights_shot.lines += shot_lines[l];
     record.lights[l].first_shot_lines = shot_lines[l];
   }
+  if (!lights.empty())
+    spdlog::info("lights' shot: {} local lines from {} light(s) ({}, {:.2f} s)", record.lights_shot.lines,
+                 lights.size(), record.lights_shot.stored ? "read from the store" : "traced", record.lights_shot.seconds);
   // The faces the first shot left brightest shoot their power with local
   // lines of their own (second_shot.h); read like the first shot.
   if (const FirstShotPlan second = plan_run_second_shot(options, mesh, state, store); !second.emitters.empty()) {

@@ -31,16 +31,18 @@ namespace {
 // raw and compressed sizes (two little-endian 64-bit words) and a zstd frame
 // with its checksum: first the plan, then the lines' fates, frame_blocks
 // blocks of kFirstShotBlock lines a frame; then the end magic.
-// The second shot's file has magics of its own ("MPSSHOT1", "MPSSEND1").
+// The second shot's file has magics of its own ("MPSSHOT1", "MPSSEND1"), and
+// so has the lights' ("MPLSHOT1", "MPLSEND1"), whose plan differs too.
 struct KindTraits {
   char magic[8], end[8];
   const char* name;   // "first shot"
   const char* which;  // "first"
 };
-constexpr KindTraits kKinds[2] = {
+constexpr KindTraits kKinds[3] = {
     {{'M', 'P', 'F', 'S', 'H', 'O', 'T', '1'}, {'M', 'P', 'F', 'S', 'E', 'N', 'D', '1'}, "first shot", "first"},
-    {{'M', 'P', 'S', 'S', 'H', 'O', 'T', '1'}, {'M', 'P', 'S', 'S', 'E', 'N', 'D', '1'}, "second shot", "second"}};
-const KindTraits& traits(ShotKind kind) { return kKinds[kind == ShotKind::first ? 0 : 1]; }
+    {{'M', 'P', 'S', 'S', 'H', 'O', 'T', '1'}, {'M', 'P', 'S', 'S', 'E', 'N', 'D', '1'}, "second shot", "second"},
+    {{'M', 'P', 'L', 'S', 'H', 'O', 'T', '1'}, {'M', 'P', 'L', 'S', 'E', 'N', 'D', '1'}, "lights' shot", "lights"}};
+const KindTraits& traits(ShotKind kind) { return kKinds[static_cast<size_t>(kind)]; }
 
 // The seed of the streams the lines of a shot drawn with lines.seed = `seed` come from.
 unsigned long long stream_seed(ShotKind kind, unsigned long long seed) {
@@ -96,14 +98,14 @@ void write_frame(std::ostream& out, const std::string& raw, int level) {
   out.write(frame.data(), static_cast<std::streamsize>(frame.size()));
 }
 
-// The fates of the lines of blocks [first_block, ...) of one frame (`seed`: their streams'): per
-// block, per emitter's run of lines in it, the distinct codes in increasing
-// order, each as its step from the one before (the first from 0) and how
-// many lines had it, less one.
-std::string encode_frame(const PatchMesh& mesh, const Tracer& tracer, const FirstShotPlan& plan,
-                         unsigned long long seed, uint64_t first_block, uint64_t blocks_a_frame) {
-  const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
-  const uint64_t blocks = plan.blocks();
+// The fates of the lines of blocks [first_block, ...) of one frame of a
+// shot of `blocks` blocks (trace_block(b, line) calls line(e, code) for
+// block b's lines in order, e the emitter's index): per block, per
+// emitter's run of lines in it, the distinct codes in increasing order,
+// each as its step from the one before (the first from 0) and how many
+// lines had it, less one.
+template <typename TraceBlock>
+std::string encode_frame(uint64_t blocks, uint64_t first_block, uint64_t blocks_a_frame, const TraceBlock& trace_block) {
   std::string raw;
   std::vector<uint32_t> codes;
   size_t run_emitter = 0;
@@ -122,18 +124,53 @@ std::string encode_frame(const PatchMesh& mesh, const Tracer& tracer, const Firs
   };
   for (uint64_t b = first_block; b < std::min(blocks, first_block + blocks_a_frame); ++b) {
     bool started = false;
-    trace_first_shot_block(
-        mesh, plan, seed, b,
-        [&](int from, const Vec3& org, const Vec3& dir) { return tracer.nearest_from(from, org, dir, tfar); },
-        [&](size_t e, uint32_t code) {
-          if (started && e != run_emitter) flush();
-          started = true;
-          run_emitter = e;
-          codes.push_back(code);
-        });
+    trace_block(b, [&](size_t e, uint32_t code) {
+      if (started && e != run_emitter) flush();
+      started = true;
+      run_emitter = e;
+      codes.push_back(code);
+    });
     flush();
   }
   return raw;
+}
+
+// Writes a shot file: the magic, the plan's frame `plan_raw`, the frames of
+// `frames`' lines, encoded on the threads (encode(first_block, blocks)),
+// and the end magic; under a temporary name until complete. Returns its size.
+template <typename Encode>
+uint64_t write_shot_file(const fs::path& path, ShotKind kind, const std::string& plan_raw, const FirstShotPlan& frames,
+                         int zstd_level, const Encode& encode) {
+  AtomicFile file(path);
+  std::ostream& out = file.stream();
+  out.write(traits(kind).magic, 8);
+  write_frame(out, plan_raw, zstd_level);
+  const uint64_t blocks_a_frame = frame_blocks(frames);
+  const uint64_t frame_total = frame_count(frames, blocks_a_frame);
+  Progress progress(fmt::format("{} for the store", traits(kind).name), frames.lines(), "lines", true);
+  uint64_t next = 0, written = 0;
+  tbb::parallel_pipeline(
+      16,
+      tbb::make_filter<void, uint64_t>(tbb::filter_mode::serial_in_order,
+                                       [&](tbb::flow_control& fc) -> uint64_t {
+                                         if (next >= frame_total) {
+                                           fc.stop();
+                                           return 0;
+                                         }
+                                         return next++;
+                                       }) &
+          tbb::make_filter<uint64_t, std::string>(
+              tbb::filter_mode::parallel, [&](uint64_t f) { return encode(f * blocks_a_frame, blocks_a_frame); }) &
+          tbb::make_filter<std::string, void>(tbb::filter_mode::serial_in_order, [&](const std::string& raw) {
+            write_frame(out, raw, zstd_level);
+            const uint64_t lines = std::min(blocks_a_frame * kFirstShotBlock, frames.lines() - written);
+            written += lines;
+            progress.advance(lines);
+          }));
+  progress.finish();
+  out.write(traits(kind).end, 8);
+  file.commit();
+  return fs::file_size(path);
 }
 
 class ShotReader {
@@ -327,6 +364,77 @@ std::string read_matching(const fs::path& path, ShotKind kind, const PatchMesh& 
   return "";
 }
 
+// The lights' shot's plan: the seed, and per light its lines (shoot_light's
+// count) and lines_hash (where those lines go: a light moved, re-aimed or
+// given another distribution sends them elsewhere; its power does not).
+struct LightsPlan {
+  unsigned long long seed = 0;
+  std::vector<uint64_t> lines, hashes;
+  bool operator==(const LightsPlan&) const = default;
+};
+constexpr uint64_t kLightsVersion = 1;
+constexpr uint64_t kMaxLights = uint64_t{1} << 16;
+
+LightsPlan lights_plan(const std::vector<PointLight>& lights, const std::vector<uint64_t>& lines,
+                       unsigned long long seed) {
+  LightsPlan plan;
+  plan.seed = seed;
+  plan.lines = lines;
+  for (const PointLight& l : lights) plan.hashes.push_back(l.lines_hash());
+  return plan;
+}
+
+// The lights as the emitters of a plan, for its frames: light e's lines
+// are lines [first[e], first[e + 1]).
+FirstShotPlan lights_frames(const LightsPlan& plan) {
+  FirstShotPlan frames;
+  for (size_t e = 0; e < plan.lines.size(); ++e) {
+    frames.emitters.push_back(static_cast<int>(e));
+    frames.first.push_back(frames.first.back() + plan.lines[e]);
+  }
+  return frames;
+}
+
+std::string encode_lights_plan(const LightsPlan& plan, size_t faces) {
+  std::string raw;
+  for (uint64_t v : {kLightsVersion, static_cast<uint64_t>(plan.seed), kFirstShotBlock,
+                     frame_blocks(lights_frames(plan)), uint64_t{faces}, uint64_t{plan.lines.size()}})
+    put_varint(raw, v);
+  for (size_t e = 0; e < plan.lines.size(); ++e) {
+    put_varint(raw, plan.lines[e]);
+    put_varint(raw, plan.hashes[e]);
+  }
+  return raw;
+}
+
+LightsPlan decode_lights_plan(ShotReader& reader, size_t faces, uint64_t& blocks_a_frame) {
+  const std::string& raw = reader.frame(64 + 20 * kMaxLights, "plan");
+  const auto* data = reinterpret_cast<const unsigned char*>(raw.data());
+  size_t pos = 0;
+  const auto next = [&](uint64_t limit) {
+    uint64_t v;
+    if (!get_varint(data, raw.size(), pos, v) || v > limit) reader.fail("plan: corrupted");
+    return v;
+  };
+  if (next(UINT64_MAX) != kLightsVersion) reader.fail("plan: written by another version of mpath");
+  LightsPlan plan;
+  plan.seed = next(UINT64_MAX);
+  if (next(UINT64_MAX) != kFirstShotBlock) reader.fail("plan: written by another version of mpath");
+  blocks_a_frame = next(kMaxFrameBlocks);
+  if (blocks_a_frame == 0) reader.fail("plan: corrupted");
+  if (next(UINT64_MAX) != faces) reader.fail("plan: made for a mesh of another number of faces");
+  const uint64_t lights = next(kMaxLights);
+  uint64_t total = 0;
+  for (uint64_t e = 0; e < lights; ++e) {
+    plan.lines.push_back(next(uint64_t{1} << 48));
+    plan.hashes.push_back(next(UINT64_MAX));
+    total += plan.lines.back();
+    if (total > (uint64_t{1} << 48)) reader.fail("plan: corrupted");
+  }
+  if (pos != raw.size()) reader.fail("plan: corrupted");
+  return plan;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -335,40 +443,18 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 uint64_t write_stored_shot(const fs::path& path, const PatchMesh& mesh, const Tracer& tracer, const FirstShotPlan& plan,
                            unsigned long long seed, int zstd_level, ShotKind kind) {
-  AtomicFile file(path);
-  std::ostream& out = file.stream();
-  out.write(traits(kind).magic, 8);
-  write_frame(out, encode_plan(plan, seed, mesh.face_count()), zstd_level);
-  const uint64_t blocks_a_frame = frame_blocks(plan);
-  const uint64_t frames = frame_count(plan, blocks_a_frame);
+  const double tfar = 4.0 * mesh.bounds.diagonal() + 1.0;
   const unsigned long long streams = stream_seed(kind, seed);
-  Progress progress(fmt::format("{} for the store", traits(kind).name), plan.lines(), "lines", true);
-  uint64_t next = 0, written = 0;
-  tbb::parallel_pipeline(
-      16,
-      tbb::make_filter<void, uint64_t>(tbb::filter_mode::serial_in_order,
-                                       [&](tbb::flow_control& fc) -> uint64_t {
-                                         if (next >= frames) {
-                                           fc.stop();
-                                           return 0;
-                                         }
-                                         return next++;
-                                       }) &
-          tbb::make_filter<uint64_t, std::string>(tbb::filter_mode::parallel,
-                                                  [&](uint64_t f) {
-                                                    return encode_frame(mesh, tracer, plan, streams,
-                                                                        f * blocks_a_frame, blocks_a_frame);
-                                                  }) &
-          tbb::make_filter<std::string, void>(tbb::filter_mode::serial_in_order, [&](const std::string& raw) {
-            write_frame(out, raw, zstd_level);
-            const uint64_t lines = std::min(blocks_a_frame * kFirstShotBlock, plan.lines() - written);
-            written += lines;
-            progress.advance(lines);
-          }));
-  progress.finish();
-  out.write(traits(kind).end, 8);
-  file.commit();
-  return fs::file_size(path);
+  return write_shot_file(
+      path, kind, encode_plan(plan, seed, mesh.face_count()), plan, zstd_level,
+      [&](uint64_t first_block, uint64_t blocks_a_frame) {
+        return encode_frame(plan.blocks(), first_block, blocks_a_frame, [&](uint64_t b, const auto& line) {
+          trace_first_shot_block(
+              mesh, plan, streams, b,
+              [&](int from, const Vec3& org, const Vec3& dir) { return tracer.nearest_from(from, org, dir, tfar); },
+              line);
+        });
+      });
 }
 
 FirstShotPlan read_stored_plan(const fs::path& path, size_t faces, unsigned long long& seed, ShotKind kind) {
@@ -419,26 +505,82 @@ std::string replay_stored_second_shot(const fs::path& path, const PatchMesh& mes
   return "";
 }
 
+uint64_t write_stored_lights(const fs::path& path, const PatchMesh& mesh, const Tracer& tracer,
+                             const std::vector<PointLight>& lights, const std::vector<uint64_t>& lines,
+                             unsigned long long seed, int zstd_level) {
+  const LightsPlan plan = lights_plan(lights, lines, seed);
+  const FirstShotPlan frames = lights_frames(plan);
+  std::vector<ShiftedHalton> points;
+  for (size_t l = 0; l < lights.size(); ++l) points.push_back(light_points(light_seed(seed, l)));
+  return write_shot_file(
+      path, ShotKind::lights, encode_lights_plan(plan, mesh.face_count()), frames, zstd_level,
+      [&](uint64_t first_block, uint64_t blocks_a_frame) {
+        return encode_frame(frames.blocks(), first_block, blocks_a_frame, [&](uint64_t b, const auto& line) {
+          const uint64_t lo = b * kFirstShotBlock, hi = std::min(frames.lines(), lo + kFirstShotBlock);
+          size_t e = std::upper_bound(frames.first.begin(), frames.first.end(), lo) - frames.first.begin() - 1;
+          for (uint64_t k = lo; k < hi; ++k) {
+            while (k >= frames.first[e + 1]) ++e;
+            double u[4];
+            points[e].point(k - frames.first[e], u);
+            line(e, light_line_outcome(mesh, tracer, lights[e], u));
+          }
+        });
+      });
+}
+
+std::string replay_stored_lights(const fs::path& path, const PatchMesh& mesh, const std::vector<PointLight>& lights,
+                                 const std::vector<uint64_t>& lines, unsigned long long seed, RadiosityState& state,
+                                 LightsShotStats& stats) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!fs::exists(path))
+    return fmt::format("the store has no {} (mpath-preprocess saw no lights, first_shot.sequence was \"random\", or "
+                       "it is older)",
+                       path.filename().string());
+  ShotReader reader(path, ShotKind::lights);
+  uint64_t blocks_a_frame = 0;
+  const LightsPlan stored = decode_lights_plan(reader, mesh.face_count(), blocks_a_frame);
+  if (stored.seed != seed) return fmt::format("the store's lights' shot was drawn with lines.seed = {}", stored.seed);
+  const LightsPlan run = lights_plan(lights, lines, seed);
+  const FirstShotPlan frames = lights_frames(run);
+  if (!(stored == run))
+    return fmt::format("this run's lights are not the store's ({} light(s), {} lines; the store {} light(s), {} lines: "
+                       "a light added, moved, re-aimed or given another distribution, or first_shot.lines or the "
+                       "lights' share of the power changed since mpath-preprocess)",
+                       run.lines.size(), frames.lines(), stored.lines.size(), lights_frames(stored).lines());
+  // Decoded and checked in full before the state changes.
+  std::vector<ShardAccumulator> acc(1);
+  acc[0].reset(state.faces);
+  read_lines(reader, mesh, frames, blocks_a_frame, [&](size_t e, uint32_t code, uint64_t n) {
+    if (code_contact(code)) reader.fail("lines: corrupted (a light's line in contact)");
+    receive_light_lines(state, lights[e], run.lines[e], code, n, acc[0]);
+  });
+  acc[0].lines = frames.lines();
+  for (const PointLight& l : lights)
+    for (int c = 0; c < state.channels; ++c) state.energy.emitted[c] += l.power();
+  merge_received(acc, state);
+  stats.lines = frames.lines();
+  stats.stored = true;
+  stats.seconds = seconds_since(start);
+  return "";
+}
+
 namespace {
 
-// Keeps the file at `path` when it holds `plan` (every frame read into a
-// copy of `state`), else traces and writes it.
-StoredShotStats keep_or_write(const fs::path& path, ShotKind kind, const Options& options, const PatchMesh& mesh,
-                              const TracerOnDemand& tracer, const FirstShotPlan& plan, const RadiosityState& state) {
+// Keeps the file at `path` when check() finds it holds what this run would
+// write (every frame read into a copy of the state; it returns why not),
+// else writes it (write() returns its size). `what`: the lines' source, for
+// the log.
+template <typename Check, typename Write>
+StoredShotStats keep_or_write(const fs::path& path, ShotKind kind, uint64_t lines, const std::string& what,
+                              const Check& check, const Write& write) {
   const auto start = std::chrono::steady_clock::now();
   StoredShotStats stats;
-  stats.lines = plan.lines();
+  stats.lines = lines;
   if (fs::exists(path)) {
     // Kept only when a solve would read it: its plan, and every frame
     // checked (a damaged file is written again, as the solve's error says).
     try {
-      RadiosityState scratch = state;
-      FirstShotStats first;
-      SecondShotStats second;
-      const std::string why = kind == ShotKind::first
-                                  ? replay_stored_shot(path, mesh, plan, options.lines.seed, scratch, first)
-                                  : replay_stored_second_shot(path, mesh, plan, options.lines.seed, scratch, second);
-      if (why.empty()) {
+      if (check().empty()) {
         stats.bytes = fs::file_size(path);
         spdlog::info("{}: the {} of this scene, written earlier, kept", path.string(), traits(kind).name);
         return stats;
@@ -447,12 +589,28 @@ StoredShotStats keep_or_write(const fs::path& path, ShotKind kind, const Options
       spdlog::warn("{}; writing it again", e.what());
     }
   }
-  stats.bytes = write_stored_shot(path, mesh, tracer.get(), plan, options.lines.seed, options.store.zstd_level, kind);
+  stats.bytes = write();
   stats.written = true;
   stats.seconds = seconds_since(start);
-  spdlog::info("{}: the {}, {} local lines from {} face(s), {:.2f} MB ({:.2f} s)", path.string(), traits(kind).name,
-               plan.lines(), plan.emitters.size(), stats.bytes / 1e6, stats.seconds);
+  spdlog::info("{}: the {}, {} local lines from {}, {:.2f} MB ({:.2f} s)", path.string(), traits(kind).name, lines,
+               what, stats.bytes / 1e6, stats.seconds);
   return stats;
+}
+
+// keep_or_write of a first or second shot's `plan`.
+StoredShotStats keep_or_write_shot(const fs::path& path, ShotKind kind, const Options& options, const PatchMesh& mesh,
+                                   const TracerOnDemand& tracer, const FirstShotPlan& plan,
+                                   const RadiosityState& state) {
+  return keep_or_write(
+      path, kind, plan.lines(), fmt::format("{} face(s)", plan.emitters.size()),
+      [&] {
+        RadiosityState scratch = state;
+        FirstShotStats first;
+        SecondShotStats second;
+        return kind == ShotKind::first ? replay_stored_shot(path, mesh, plan, options.lines.seed, scratch, first)
+                                       : replay_stored_second_shot(path, mesh, plan, options.lines.seed, scratch, second);
+      },
+      [&] { return write_stored_shot(path, mesh, tracer.get(), plan, options.lines.seed, options.store.zstd_level, kind); });
 }
 
 }  // namespace
@@ -471,17 +629,49 @@ StoredShots store_shots(const Options& options, const PreparedScene& prepared, c
   const RunFirstShot run = plan_run_first_shot(options, mesh, state, crossings->all, lights);
   TracerOnDemand tracer(mesh);
   StoredShots shots;
-  shots.first = keep_or_write(dir / kStoredShotFile, ShotKind::first, options, mesh, tracer, run.plan, state);
+  shots.first = keep_or_write_shot(dir / kStoredShotFile, ShotKind::first, options, mesh, tracer, run.plan, state);
+  // The lights' shot, where its lines do not depend on the threads (a
+  // light's independent points are drawn per shard).
+  const fs::path lights_path = dir / kStoredLightsFile;
+  std::vector<uint64_t> light_lines;
+  for (size_t l = 0; l < lights.size(); ++l) light_lines.push_back(light_line_count(lights[l], run.light_lines[l]));
+  const bool store_lights = !lights.empty() && options.first_shot.halton();
+  if (store_lights) {
+    uint64_t lines = 0;
+    for (uint64_t n : light_lines) lines += n;
+    shots.lights = keep_or_write(
+        lights_path, ShotKind::lights, lines, fmt::format("{} light(s)", lights.size()),
+        [&] {
+          RadiosityState scratch = state;
+          LightsShotStats stats;
+          return replay_stored_lights(lights_path, mesh, lights, light_lines, options.lines.seed, scratch, stats);
+        },
+        [&] {
+          return write_stored_lights(lights_path, mesh, tracer.get(), lights, light_lines, options.lines.seed,
+                                     options.store.zstd_level);
+        });
+  } else {
+    fs::remove(lights_path);  // a solve traces its lights
+  }
   // The state a solve of this store has before its second shot: the stored
-  // first shot read back, then the lights (solve.cpp, start_state).
+  // first shot read back, then the lights (solve.cpp, start_state), read
+  // back too where they are stored.
   const auto start = std::chrono::steady_clock::now();
   FirstShotPlan plan;
   if (options.second_shot.share > 0) {
+    const auto read_back = [&](const fs::path& path, const std::string& why) {
+      if (!why.empty()) throw std::runtime_error(fmt::format("{}: written and then not read back: {}", path.string(), why));
+    };
     FirstShotStats read;
-    if (const std::string why = replay_stored_shot(dir / kStoredShotFile, mesh, run.plan, options.lines.seed, state, read);
-        !why.empty())
-      throw std::runtime_error(fmt::format("{}: written and then not read back: {}", (dir / kStoredShotFile).string(), why));
-    shoot_lights(options, mesh, tracer.get(), state, lights, run.light_lines);
+    read_back(dir / kStoredShotFile,
+              replay_stored_shot(dir / kStoredShotFile, mesh, run.plan, options.lines.seed, state, read));
+    if (store_lights) {
+      LightsShotStats lights_read;
+      read_back(lights_path,
+                replay_stored_lights(lights_path, mesh, lights, light_lines, options.lines.seed, state, lights_read));
+    } else {
+      shoot_lights(options, mesh, tracer.get(), state, lights, run.light_lines);
+    }
     plan = plan_run_second_shot(options, state, crossings->root);
   }
   const fs::path path = dir / kStoredSecondShotFile;
@@ -489,7 +679,7 @@ StoredShots store_shots(const Options& options, const PreparedScene& prepared, c
     fs::remove(path);  // a solve plans none either
     return shots;
   }
-  shots.second = keep_or_write(path, ShotKind::second, options, mesh, tracer, plan, state);
+  shots.second = keep_or_write_shot(path, ShotKind::second, options, mesh, tracer, plan, state);
   shots.second.seconds = seconds_since(start);
   return shots;
 }

@@ -20,10 +20,12 @@ namespace mpath {
 
 inline constexpr const char* kStoredShotFile = "first_shot.bin";
 inline constexpr const char* kStoredSecondShotFile = "second_shot.bin";
+inline constexpr const char* kStoredLightsFile = "lights_shot.bin";
 
 // Which shot a file holds: the files differ in their magic and in the
-// random streams their lines come from (second_shot_stream for the second).
-enum class ShotKind { first, second };
+// random streams their lines come from (second_shot_stream for the second,
+// each light's light_seed for the lights').
+enum class ShotKind { first, second, lights };
 
 struct StoredShotStats {
   uint64_t lines = 0;
@@ -56,6 +58,25 @@ std::string replay_stored_second_shot(const std::filesystem::path& path, const P
                                       const FirstShotPlan& plan, unsigned long long seed, RadiosityState& state,
                                       SecondShotStats& stats);
 
+// The lights' shot (first_shot.h, shoot_lights) with first_shot.sequence =
+// "halton": light l's lines[l] lines (light_line_count) from lines.seed =
+// `seed`, traced on the threads, their fates written to `path` (under a
+// temporary name until complete). With "random" a light's points are drawn
+// per shard, so its lines depend on solver.shards: not stored.
+uint64_t write_stored_lights(const std::filesystem::path& path, const PatchMesh& mesh, const Tracer& tracer,
+                             const std::vector<PointLight>& lights, const std::vector<uint64_t>& lines,
+                             unsigned long long seed, int zstd_level);
+
+// Adds the stored lights' shot at `path` to `state` (their power to the
+// emitted energy, as shoot_lights) when it was made for these lights (each
+// light's position, frame and distribution: PointLight::lines_hash), `lines`
+// and `seed`, and returns ""; otherwise returns why not, leaving `state` as
+// it was. The lines carry the lights' power of this run. InputError when
+// the file is damaged.
+std::string replay_stored_lights(const std::filesystem::path& path, const PatchMesh& mesh,
+                                 const std::vector<PointLight>& lights, const std::vector<uint64_t>& lines,
+                                 unsigned long long seed, RadiosityState& state, LightsShotStats& stats);
+
 // The store's crossing counts per face: by every box's lines
 // (BoxStore::face_crossings) and by the root's (BoxStore::root_crossings).
 struct StoreCrossings {
@@ -63,13 +84,14 @@ struct StoreCrossings {
 };
 
 // What mpath-preprocess runs once the store in options.store.dir is
-// complete: the first shot a solve with these options would trace, then the
-// second shot it would trace after it (from the state the stored first shot
-// and the lights give), each written beside the box files unless the file
-// there holds it already. `crossings`: the store's crossing counts, when
+// complete: the first shot a solve with these options would trace, its
+// lights' shot, then the second shot it would trace after them (from the
+// state the stored first shot and lights give), each written beside the box
+// files unless the file there holds it already. `crossings`: the store's crossing counts, when
 // the caller counted them; otherwise the store is opened to read them.
 struct StoredShots {
   StoredShotStats first, second;  // second: lines 0 where the plan has none (the file removed)
+  StoredShotStats lights;         // lines 0 without lights or with first_shot.sequence = "random" (no file)
 };
 StoredShots store_shots(const Options& options, const PreparedScene& prepared,
                         const StoreCrossings* crossings = nullptr);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <random>
 #include <set>
 
@@ -468,6 +469,187 @@ TEST(StoredShot, TheSolveReadsThePreprocessorsSecondShot) {
   // A preprocess with second_shot.share = 0 plans none and leaves no file.
   ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " " + config + common + " second_shot.share=0").exit_code, 0);
   EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+// 1 to 3 lights at random places in a random room (random_room's box of
+// w x d x h lies within 4 x 3.5 x 2 m; a light may fall inside a box): an
+// isotropic one and downlights of a random candela table, tilted.
+std::vector<PointLight> random_lights(unsigned seed, const PatchMesh& mesh) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<PointLight> lights;
+  const int n = 1 + static_cast<int>(seed % 3);
+  for (int l = 0; l < n; ++l) {
+    LightOptions o;
+    o.name = fmt::format("light {}", l);
+    const Vec3 lo = mesh.bounds.lo, size = mesh.bounds.hi - mesh.bounds.lo;
+    o.position = {lo.x + (0.1 + 0.8 * u(rng)) * size.x, lo.y + (0.1 + 0.8 * u(rng)) * size.y,
+                  lo.z + (0.5 + 0.45 * u(rng)) * size.z};
+    o.intensity_cd = 100 + 900 * u(rng);
+    o.nadir = {0.3 * (u(rng) - 0.5), 0.3 * (u(rng) - 0.5), -1};
+    PointLight light = make_light(o);
+    if (l > 0) {  // a downlight: intensity falling with the angle from nadir, ragged across C planes
+      std::vector<double> vertical, horizontal{0, 90, 180, 270, 360}, candela;
+      for (int v = 0; v <= 90; v += 15) vertical.push_back(v);
+      for (size_t h = 0; h < horizontal.size(); ++h)
+        for (size_t v = 0; v < vertical.size(); ++v)
+          candela.push_back(v + 1 == vertical.size() ? 0.0 : (500 + 300 * u(rng)) * std::cos(vertical[v] * 0.0174533));
+      for (size_t v = 0; v < vertical.size(); ++v) candela[4 * vertical.size() + v] = candela[v];  // 360 = 0
+      light.distribution = LightDistribution(vertical, horizontal, candela);
+    }
+    lights.push_back(light);
+  }
+  return lights;
+}
+
+// Read back, the stored lights' shot is the traced one (shoot_lights), on
+// random rooms with random lights; the lines carry this run's power.
+TEST(StoredShot, ReadingTheLightsShotGivesWhatTracingItGives) {
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    TempDir dir;
+    Prepared s = prepared_room(random_room(seed), 0.02);
+    const Tracer tracer(s.mesh);
+    std::vector<PointLight> lights = random_lights(seed, s.mesh);
+    Options o;
+    o.lines.seed = seed;
+    o.solver.shards = 1 + static_cast<int>(seed % 4);
+    std::vector<long long> asked;
+    std::vector<uint64_t> lines;
+    for (const PointLight& l : lights) {
+      asked.push_back(10'000 + 3'917 * seed);
+      lines.push_back(light_line_count(l, asked.back()));
+    }
+    const auto path = dir / kStoredLightsFile;
+    write_stored_lights(path, s.mesh, tracer, lights, lines, seed, 3);
+    RadiosityState traced = s.state, stored = s.state;
+    EXPECT_EQ(shoot_lights(o, s.mesh, tracer, traced, lights, asked), lines);
+    LightsShotStats stats;
+    ASSERT_EQ(replay_stored_lights(path, s.mesh, lights, lines, seed, stored, stats), "") << "room " << seed;
+    EXPECT_TRUE(stats.stored);
+    EXPECT_EQ(stats.lines, std::accumulate(lines.begin(), lines.end(), uint64_t{0}));
+    expect_same_state(traced, stored, fmt::format("room {}", seed));
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(traced.energy.emitted[c], stored.energy.emitted[c]);
+    // The room's emitting faces are not shot here: what the lights emit is
+    // what their lines left absorbed, escaped or unshot.
+    EXPECT_LT(std::abs(stored.energy_residual() - s.state.energy_residual()), 1e-12 * stored.emitted_total())
+        << "emitted = absorbed + escaped + unshot";
+    // Dimmed lights send the same lines with their power of this run.
+    for (PointLight& l : lights) l.options.multiplier = 0.25 + 0.5 * (seed % 2);
+    RadiosityState dimmed_traced = s.state, dimmed_stored = s.state;
+    shoot_lights(o, s.mesh, tracer, dimmed_traced, lights, asked);
+    ASSERT_EQ(replay_stored_lights(path, s.mesh, lights, lines, seed, dimmed_stored, stats), "") << "room " << seed;
+    expect_same_state(dimmed_traced, dimmed_stored, fmt::format("room {}, dimmed", seed));
+  }
+}
+
+// A lights' shot of other lights, lines or seed is not read, and says why;
+// a damaged one is an InputError naming the file and leaves the state.
+TEST(StoredShot, ALightsShotOfOtherLightsIsNotReadAndSaysWhy) {
+  TempDir dir;
+  Prepared s = prepared_room(random_room(3), 0.02);
+  const Tracer tracer(s.mesh);
+  const std::vector<PointLight> lights = random_lights(3, s.mesh);
+  ASSERT_EQ(lights.size(), 1u);
+  const std::vector<uint64_t> lines{20'000};
+  const auto path = dir / kStoredLightsFile;
+  LightsShotStats stats;
+  RadiosityState state = s.state;
+  EXPECT_NE(replay_stored_lights(path, s.mesh, lights, lines, 1, state, stats).find("has no lights_shot.bin"),
+            std::string::npos);
+  write_stored_lights(path, s.mesh, tracer, lights, lines, 1, 3);
+  EXPECT_NE(replay_stored_lights(path, s.mesh, lights, lines, 2, state, stats).find("drawn with lines.seed = 1"),
+            std::string::npos);
+  EXPECT_NE(replay_stored_lights(path, s.mesh, lights, {30'000}, 1, state, stats).find("lights are not the store's"),
+            std::string::npos);
+  std::vector<PointLight> moved = lights;
+  moved[0].options.position.x += 0.01;
+  EXPECT_NE(replay_stored_lights(path, s.mesh, moved, lines, 1, state, stats).find("moved, re-aimed"), std::string::npos);
+  std::vector<PointLight> two = random_lights(2, s.mesh);
+  EXPECT_NE(replay_stored_lights(path, s.mesh, two, {20'000, 20'000}, 1, state, stats).find("2 light(s)"),
+            std::string::npos);
+  EXPECT_EQ(state.phi, s.state.phi) << "nothing read";
+  // The first shot's file under the lights' name: another kind of file.
+  write_stored_shot(dir / "first.bin", s.mesh, tracer, plan_first_shot(s.mesh, s.state, 5'000, {}), 1, 3);
+  std::filesystem::copy_file(dir / "first.bin", path, std::filesystem::copy_options::overwrite_existing);
+  EXPECT_NE(message_of([&] { replay_stored_lights(path, s.mesh, lights, lines, 1, state, stats); })
+                .find("not a lights-shot file"),
+            std::string::npos);
+  write_stored_lights(path, s.mesh, tracer, lights, lines, 1, 3);
+  std::string bad = test::read_file(path);
+  bad[bad.size() - 20] = static_cast<char>(bad[bad.size() - 20] ^ 0x10);
+  test::write_file(path, bad);
+  const std::string why = message_of([&] { replay_stored_lights(path, s.mesh, lights, lines, 1, state, stats); });
+  EXPECT_NE(why.find("lights_shot.bin"), std::string::npos) << why;
+  EXPECT_NE(why.find("run mpath-preprocess again"), std::string::npos) << why;
+  EXPECT_EQ(state.phi, s.state.phi) << "nothing read";
+}
+
+// End to end: mpath-preprocess stores the lights' shot of a room lit by a
+// point source and an IES luminaire, and a solve reads it: the same
+// solution as one that traces it; a moved light is traced and says why, a damaged file makes the solve exit 1, and with
+// first_shot.sequence = "random" no file is written.
+TEST(StoredShot, TheSolveReadsThePreprocessorsLightsShot) {
+  TempDir dir;
+  std::filesystem::copy(std::string(MPATH_SOURCE_DIR) + "/configs/room", dir / "room",
+                        std::filesystem::copy_options::recursive);
+  test::write_file(dir / "downlight.ies",
+                   "IESNA:LM-63-2002\nTILT=NONE\n1 1000 1 3 1 1 2 0.1 0.1 0\n1 1 50\n0 45 90\n0\n900 500 0\n");
+  test::write_file(dir / "run.toml", "[scene]\nfile = \"room/room.obj\"\ntwo_sided = [\"lampshade\"]\n"
+                                     "[scene.emitters]\nbulb = 0\n[mesh]\nmax_patch_area = 0.05\n"
+                                     "[lines]\ntotal = 150000\n[solver]\nmethod = \"hierarchical\"\n"
+                                     "[store]\ndir = \"store\"\nchunk_lines = 4096\n[output]\npng = false\nexr = false\n"
+                                     "[[light]]\nname = \"bulb\"\nposition = [2.0, 2.0, 2.2]\nintensity_cd = 400\n"
+                                     "[[light]]\nname = \"downlight\"\nposition = [3.5, 1.5, 2.6]\nies = \"downlight.ies\"\n");
+  const std::string config = (dir / "run.toml").string();
+  const auto path = dir / "store" / kStoredLightsFile;
+  const auto solve = [&](const std::string& out, const std::string& more) {
+    const test::RunResult r = test::run(test::solve_bin() + " -q " + config + " output.dir=" + (dir / out).string() + more);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return nlohmann::json::parse(test::read_file(dir / out / "report.json"));
+  };
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " -q " + config).exit_code, 0);
+  ASSERT_TRUE(std::filesystem::exists(path));
+  const auto stats = nlohmann::json::parse(test::read_file(dir / "store" / "preprocess.json"));
+  EXPECT_EQ(stats["lights_shot_bytes"].get<uint64_t>(), std::filesystem::file_size(path));
+
+  const nlohmann::json read = solve("read", "");
+  EXPECT_TRUE(read["lights_shot"]["from_store"].get<bool>()) << read["lights_shot"];
+  EXPECT_EQ(read["lights_shot"]["lines"].get<uint64_t>(), stats["lights_shot_lines"].get<uint64_t>());
+  EXPECT_EQ(read["lights"][0]["first_shot_lines"].get<uint64_t>() + read["lights"][1]["first_shot_lines"].get<uint64_t>(),
+            stats["lights_shot_lines"].get<uint64_t>());
+  EXPECT_TRUE(read["second_shot"]["from_store"].get<bool>()) << "planned from the state the stored lights give";
+  EXPECT_LT(std::abs(read["energy"]["relative_residual"].get<double>()), 1e-9);
+
+  std::filesystem::rename(path, dir / "lights.kept");
+  const nlohmann::json traced = solve("traced", "");
+  EXPECT_FALSE(traced["lights_shot"]["from_store"].get<bool>());
+  EXPECT_NE(traced["lights_shot"]["traced_because"].get<std::string>().find("has no lights_shot.bin"), std::string::npos);
+  EXPECT_EQ(test::read_file(dir / "read" / "solution.ply"), test::read_file(dir / "traced" / "solution.ply"))
+      << "the solutions agree to the last bit of their floats";
+  std::filesystem::rename(dir / "lights.kept", path);
+
+  // Another place for the bulb: its lines go elsewhere.
+  std::string text = test::read_file(dir / "run.toml");
+  text.replace(text.find("[2.0, 2.0, 2.2]"), 15, "[2.0, 2.1, 2.2]");
+  test::write_file(dir / "run.toml", text);
+  const nlohmann::json elsewhere = solve("elsewhere", "");
+  EXPECT_FALSE(elsewhere["lights_shot"]["from_store"].get<bool>());
+  EXPECT_NE(elsewhere["lights_shot"]["traced_because"].get<std::string>().find("moved"), std::string::npos)
+      << elsewhere["lights_shot"];
+  text.replace(text.find("[2.0, 2.1, 2.2]"), 15, "[2.0, 2.0, 2.2]");
+  test::write_file(dir / "run.toml", text);
+
+  const std::string good = test::read_file(path);
+  std::string bad = good;
+  bad[bad.size() - 20] = static_cast<char>(bad[bad.size() - 20] ^ 0x10);
+  test::write_file(path, bad);
+  const test::RunResult refused = test::run(test::solve_bin() + " -q " + config + " output.dir=" + (dir / "refused").string());
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.output.find("lights_shot.bin"), std::string::npos) << refused.output;
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " -q " + config).exit_code, 0);
+  EXPECT_EQ(test::read_file(path), good) << "written again, the same";
+  ASSERT_EQ(test::run(test::program_bin("mpath-preprocess") + " -q " + config + " first_shot.sequence=\"random\"").exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(path)) << "a light's random points depend on the shards";
 }
 
 // Where every surface emits, first_shot.mode = "auto" leaves faces to the

@@ -8,6 +8,7 @@
 
 #include "color.h"
 #include "error.h"
+#include "hash.h"
 #include "text_tokenizer.h"
 
 namespace mpath {
@@ -85,6 +86,14 @@ void LightDistribution::sample(double u1, double u2, double u3, double& theta, d
   const double c0 = std::cos(t * kDeg), c1 = std::cos((t + 1) * kDeg);
   theta = std::acos(std::clamp(c0 + (c1 - c0) * u2, -1.0, 1.0));  // uniform in solid angle within the bin
   phi = (p + u3) * kDeg;
+}
+
+uint64_t LightDistribution::sampling_hash() const {
+  Fnv1a h;
+  h.add(&isotropic_, sizeof isotropic_);
+  h.add(&flux_, sizeof flux_);
+  h.add(cdf_.data(), cdf_.size() * sizeof(double));
+  return h.value();
 }
 
 LightDistribution read_ies(const std::filesystem::path& path) {
@@ -172,6 +181,14 @@ Vec3 PointLight::sample(double u1, double u2, double u3) const {
   double theta, phi;
   distribution.sample(u1, u2, u3, theta, phi);
   return normalize(nadir * std::cos(theta) + (c0 * std::cos(phi) + c90 * std::sin(phi)) * std::sin(theta));
+}
+
+uint64_t PointLight::lines_hash() const {
+  Fnv1a h;
+  for (const Vec3* v : {&options.position, &nadir, &c0, &c90}) h.add(v, sizeof *v);
+  const uint64_t shape = distribution.sampling_hash();
+  h.add(&shape, sizeof shape);
+  return h.value();
 }
 
 std::vector<PointLight> make_lights(const std::vector<LightOptions>& options) {

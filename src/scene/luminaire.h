@@ -2,6 +2,7 @@
 // an IESNA LM-63 photometric file, type C), placed and aimed in the scene.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -37,6 +38,9 @@ class LightDistribution {
   double flux() const { return flux_; }
   // A direction drawn in proportion to I (of the bins), from three uniform numbers.
   void sample(double u1, double u2, double u3, double& theta, double& phi) const;
+  // A hash of what sample() draws from (the bins' cumulative intensity):
+  // equal for equal distributions, whatever file or multiplier gave them.
+  uint64_t sampling_hash() const;
 
  private:
   void bin();
@@ -65,6 +69,9 @@ struct PointLight {
   double power() const;
   // A world direction drawn in proportion to the intensity.
   Vec3 sample(double u1, double u2, double u3) const;
+  // A hash of where sample() sends lines from: the position, the frame and
+  // the distribution's sampling_hash (not its power).
+  uint64_t lines_hash() const;
 };
 
 PointLight make_light(const LightOptions& options);
