@@ -5,7 +5,9 @@
 #include <tbb/parallel_pipeline.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <initializer_list>
 #include <cstring>
 #include <fstream>
 #include <optional>
@@ -226,38 +228,67 @@ class ShotReader {
   std::string compressed_, raw_;
 };
 
+// A plan frame's varints, each read against a limit ("plan: corrupted"
+// past it or at the frame's end), and the header every shot file's plan
+// starts with: the version (returned, one of `versions`), lines.seed, the
+// block's lines, the frame's blocks and the mesh's faces.
+class PlanFields {
+ public:
+  PlanFields(ShotReader& reader, uint64_t max_raw) : reader_(reader), raw_(reader.frame(max_raw, "plan")) {}
+
+  uint64_t next(uint64_t limit) {
+    uint64_t v;
+    if (!get_varint(reinterpret_cast<const unsigned char*>(raw_.data()), raw_.size(), pos_, v) || v > limit)
+      reader_.fail("plan: corrupted");
+    return v;
+  }
+
+  uint64_t header(std::initializer_list<uint64_t> versions, size_t faces, unsigned long long& seed,
+                  uint64_t& blocks_a_frame) {
+    const uint64_t version = next(UINT64_MAX);
+    if (std::find(versions.begin(), versions.end(), version) == versions.end())
+      reader_.fail("plan: written by another version of mpath");
+    seed = next(UINT64_MAX);
+    if (next(UINT64_MAX) != kFirstShotBlock) reader_.fail("plan: written by another version of mpath");
+    blocks_a_frame = next(kMaxFrameBlocks);
+    if (blocks_a_frame == 0) reader_.fail("plan: corrupted");
+    if (next(UINT64_MAX) != faces) reader_.fail("plan: made for a mesh of another number of faces");
+    return version;
+  }
+
+  void expect_end() const {
+    if (pos_ != raw_.size()) reader_.fail("plan: corrupted");
+  }
+
+  [[noreturn]] void fail() const { reader_.fail("plan: corrupted"); }
+
+ private:
+  ShotReader& reader_;
+  const std::string& raw_;
+  size_t pos_ = 0;
+};
+
 FirstShotPlan decode_plan(ShotReader& reader, size_t faces, unsigned long long& seed, uint64_t* blocks_a_frame = nullptr) {
   // Two varints per face at most, and a few more.
-  const std::string& raw = reader.frame(64 + 30 * (uint64_t{faces} + 1), "plan");
-  const auto* data = reinterpret_cast<const unsigned char*>(raw.data());
-  size_t pos = 0;
-  const auto next = [&](uint64_t limit) {
-    uint64_t v;
-    if (!get_varint(data, raw.size(), pos, v) || v > limit) reader.fail("plan: corrupted");
-    return v;
-  };
-  const uint64_t version = next(UINT64_MAX);
-  if (version != 1 && version != kVersion) reader.fail("plan: written by another version of mpath");
-  seed = next(UINT64_MAX);
-  if (next(UINT64_MAX) != kFirstShotBlock) reader.fail("plan: written by another version of mpath");
-  const uint64_t frame = next(kMaxFrameBlocks);
-  if (frame == 0) reader.fail("plan: corrupted");
+  PlanFields fields(reader, 64 + 30 * (uint64_t{faces} + 1));
+  const auto next = [&](uint64_t limit) { return fields.next(limit); };
+  uint64_t frame = 0;
+  const uint64_t version = fields.header({1, kVersion}, faces, seed, frame);
   if (blocks_a_frame) *blocks_a_frame = frame;
-  if (next(UINT64_MAX) != faces) reader.fail("plan: made for a mesh of another number of faces");
   FirstShotPlan plan;
   const uint64_t emitters = next(faces);
   int previous = -1;
   // Faces in increasing order, each as its step from the one before.
   const auto next_face = [&](int previous) {
     const uint64_t step = next(static_cast<uint64_t>(faces) - static_cast<uint64_t>(previous + 1));
-    if (step == 0) reader.fail("plan: corrupted");
+    if (step == 0) fields.fail();
     return previous + static_cast<int>(step);
   };
   for (uint64_t e = 0; e < emitters; ++e) {
     previous = next_face(previous);
     plan.emitters.push_back(previous);
     const uint64_t lines = next(uint64_t{1} << 48);
-    if (lines == 0 || plan.first.back() + lines > (uint64_t{1} << 48)) reader.fail("plan: corrupted");
+    if (lines == 0 || plan.first.back() + lines > (uint64_t{1} << 48)) fields.fail();
     plan.first.push_back(plan.first.back() + lines);
   }
   const uint64_t global = next(faces);
@@ -267,7 +298,7 @@ FirstShotPlan decode_plan(ShotReader& reader, size_t faces, unsigned long long& 
     plan.global_faces.push_back(previous);
   }
   plan.halton = version >= 2 && next(1) == 1;
-  if (pos != raw.size()) reader.fail("plan: corrupted");
+  fields.expect_end();
   return plan;
 }
 
@@ -408,30 +439,18 @@ std::string encode_lights_plan(const LightsPlan& plan, size_t faces) {
 }
 
 LightsPlan decode_lights_plan(ShotReader& reader, size_t faces, uint64_t& blocks_a_frame) {
-  const std::string& raw = reader.frame(64 + 20 * kMaxLights, "plan");
-  const auto* data = reinterpret_cast<const unsigned char*>(raw.data());
-  size_t pos = 0;
-  const auto next = [&](uint64_t limit) {
-    uint64_t v;
-    if (!get_varint(data, raw.size(), pos, v) || v > limit) reader.fail("plan: corrupted");
-    return v;
-  };
-  if (next(UINT64_MAX) != kLightsVersion) reader.fail("plan: written by another version of mpath");
+  PlanFields fields(reader, 64 + 20 * kMaxLights);
   LightsPlan plan;
-  plan.seed = next(UINT64_MAX);
-  if (next(UINT64_MAX) != kFirstShotBlock) reader.fail("plan: written by another version of mpath");
-  blocks_a_frame = next(kMaxFrameBlocks);
-  if (blocks_a_frame == 0) reader.fail("plan: corrupted");
-  if (next(UINT64_MAX) != faces) reader.fail("plan: made for a mesh of another number of faces");
-  const uint64_t lights = next(kMaxLights);
+  fields.header({kLightsVersion}, faces, plan.seed, blocks_a_frame);
+  const uint64_t lights = fields.next(kMaxLights);
   uint64_t total = 0;
   for (uint64_t e = 0; e < lights; ++e) {
-    plan.lines.push_back(next(uint64_t{1} << 48));
-    plan.hashes.push_back(next(UINT64_MAX));
+    plan.lines.push_back(fields.next(uint64_t{1} << 48));
+    plan.hashes.push_back(fields.next(UINT64_MAX));
     total += plan.lines.back();
-    if (total > (uint64_t{1} << 48)) reader.fail("plan: corrupted");
+    if (total > (uint64_t{1} << 48)) fields.fail();
   }
-  if (pos != raw.size()) reader.fail("plan: corrupted");
+  fields.expect_end();
   return plan;
 }
 
