@@ -969,6 +969,22 @@ from this run's CSVs; what follows explains them, from the profiles in
   1.45 -> 1.38x, office3 2.87 -> 3.11x, soda 1.42 -> 1.74x; the host ran
   classic 5-20 % slower in this run than in the last on every scene but
   OFFICE, where it ran faster).
+- **This run, on another host** (December 7, 2026, at 5d53f7e: an Intel
+  Xeon where the evaluations before ran on an AMD EPYC; since 7ce4b49 the
+  shot files' smaller frames, f944a20, and the stored lights' shot, which
+  none of these scenes has). Every error is that of the evaluation before
+  to the printed digit. Both methods run slower on this host (classic's
+  office2 solve at 1M lines 1.76 s against 1.44 s, the hierarchical
+  preprocess 0.83 s against 0.69 s), and a stored pass, bound by its
+  memory loads, most: OFFICE's line-set passes ran 11 M events per second
+  per thread here against 21 M there (docs/performance.md, "Stored
+  passes"). So the kept-store speed-ups are lower everywhere (ROOM 10.23
+  -> 8.81x, BIG ROOM 9.26 -> 8.30x, OFFICE 13.97 -> 12.20x, office2 6.54
+  -> 6.16x, office3 11.84 -> 9.91x, soda 6.88 -> 5.34x), every one above
+  the 5x target, and the first runs by 2-12 % (ROOM 1.80 ->
+  1.63x, BIG ROOM 1.64 -> 1.59x, OFFICE 3.76 -> 3.70x, office2 1.38 ->
+  1.32x, office3 3.11 -> 2.73x, soda 1.74 -> 1.64x). Compare ratios
+  within a run, not across hosts.
 - **Where the error lies.** The table under each scene splits each
   method's squared error by box. Wherever the hierarchy gives a small
   bright box lines of its own (a lamp in its shade: ROOM's, BIG ROOM's,
@@ -1021,14 +1037,14 @@ from this run's CSVs; what follows explains them, from the profiles in
   - What is left is a cheaper line: the preprocess would have to trace,
     count, encode and compress a line for clearly less than a classic pass
     traces and transports one.
-- **office2's first run: the target missed** (1.38x against 1.5x, its
-  budgets 1.08-1.87x; 1.45x in the evaluation at 6c08a0c and 1.57x at
-  0a89dc3, before the second shot). Its first-run speed-up falls with
-  lines (1.87x at 500,000, 1.08x at 4M): the error ratio at equal lines is
-  about one, so a first run gains only what classic's later passes cost
-  beyond the store's tracing and iterations, and at 4M lines the
-  preprocess alone (2.18 s) takes four fifths of classic's solve
-  (2.74 s).
+- **office2's first run: the target missed** (1.32x against 1.5x, its
+  budgets 1.04-2.18x; 1.38x in the evaluation at 7ce4b49 on another host,
+  1.45x at 6c08a0c and 1.57x at 0a89dc3, before the second shot). Its
+  first-run speed-up falls with lines (2.18x at 500,000, 1.04x at 4M):
+  the error ratio at equal lines is about one, so a first run gains only
+  what classic's later passes cost beyond the store's tracing and
+  iterations, and at 4M lines the preprocess alone (3.00 s) takes four
+  fifths of classic's solve (3.64 s).
   - 58 % of classic's squared error is in the room's walls, ceiling and
     desks (the root) and 31 % more in two wall slabs that get few or no
     lines of their own; the hierarchical runs err there 1.14-1.32 times as
@@ -1049,8 +1065,8 @@ from this run's CSVs; what follows explains them, from the profiles in
   by `mpath-preprocess`), so it is the transport loop over the stored
   lines and little else (no BVH where every face is carried), while
   classic traces its first and second shots on every solve. soda's
-  kept-store solve (6.88x here, 4.92x in the evaluation before this one)
-  is the shortest beside classic's: its fixed second (loading, opening the
+  kept-store solve (5.34x here, 6.88x in the evaluation before this one on
+  another host) is the shortest beside classic's: its fixed second (loading, opening the
   store, the outputs) stays whatever the lines; these times include each
   program's start-up, about 0.03 s with the exec that asks for huge pages,
   and at 1M lines that is a sixth of a short solve.
