@@ -172,6 +172,12 @@ uint64_t light_line_count(const PointLight& light, long long lines) {
   return light.power() > 0 ? static_cast<uint64_t>(std::max<long long>(lines, 1)) : 0;
 }
 
+std::vector<uint64_t> light_line_counts(const std::vector<PointLight>& lights, const std::vector<long long>& lines) {
+  std::vector<uint64_t> counts;
+  for (size_t l = 0; l < lights.size(); ++l) counts.push_back(light_line_count(lights[l], lines[l]));
+  return counts;
+}
+
 // The Halton points' shift: the light's stream, past the shards' indices.
 ShiftedHalton light_points(unsigned long long light_seed) {
   return ShiftedHalton(make_rng(light_seed, kLightStream, kLightShiftIndex));

@@ -252,6 +252,8 @@ struct LightsShotStats {
 // adding `lines` of the light's `count` lines that met `code`.
 unsigned long long light_seed(unsigned long long seed, size_t light);
 uint64_t light_line_count(const PointLight& light, long long lines);
+// light_line_count of each light for the lines RunFirstShot asks of it.
+std::vector<uint64_t> light_line_counts(const std::vector<PointLight>& lights, const std::vector<long long>& lines);
 ShiftedHalton light_points(unsigned long long light_seed);
 uint32_t light_line_outcome(const PatchMesh& mesh, const Tracer& tracer, const PointLight& light, const double u[3]);
 void receive_light_lines(const RadiosityState& state, const PointLight& light, uint64_t count, uint32_t code,

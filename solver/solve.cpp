@@ -156,8 +156,7 @@ void start_state(const Options& run_options, const SolveFlags& flags, const Scen
   if (record.shot.stored)
     spdlog::info("first shot: {} local lines read from the store ({:.2f} s)", record.shot.lines, record.shot.seconds);
   // The lights' shot: read like the first shot where the store holds it.
-  std::vector<uint64_t> shot_lines;
-  for (size_t l = 0; l < lights.size(); ++l) shot_lines.push_back(light_line_count(lights[l], shot.light_lines[l]));
+  std::vector<uint64_t> shot_lines = light_line_counts(lights, shot.light_lines);
   if (!lights.empty())
     record.lights_shot.traced_because = read_or_trace(
         store, false, "lights' shot",

@@ -66,11 +66,19 @@ uint64_t frame_count(const FirstShotPlan& plan, uint64_t blocks_a_frame) {
   return (plan.blocks() + blocks_a_frame - 1) / blocks_a_frame;
 }
 
-std::string encode_plan(const FirstShotPlan& plan, unsigned long long seed, size_t faces) {
+// The header every shot file's plan starts with (PlanFields::header reads
+// it): the version, lines.seed, the block's lines, the blocks a frame of
+// `frames` holds and the mesh's faces; then `count` (the plan's emitters).
+std::string plan_header(uint64_t version, unsigned long long seed, const FirstShotPlan& frames, size_t faces,
+                        uint64_t count) {
   std::string raw;
-  for (uint64_t v : {kVersion, static_cast<uint64_t>(seed), kFirstShotBlock, frame_blocks(plan), uint64_t{faces},
-                     uint64_t{plan.emitters.size()}})
+  for (uint64_t v : {version, static_cast<uint64_t>(seed), kFirstShotBlock, frame_blocks(frames), uint64_t{faces}, count})
     put_varint(raw, v);
+  return raw;
+}
+
+std::string encode_plan(const FirstShotPlan& plan, unsigned long long seed, size_t faces) {
+  std::string raw = plan_header(kVersion, seed, plan, faces, plan.emitters.size());
   int previous = -1;
   for (size_t e = 0; e < plan.emitters.size(); ++e) {
     put_varint(raw, static_cast<uint64_t>(plan.emitters[e] - previous));
@@ -427,10 +435,7 @@ FirstShotPlan lights_frames(const LightsPlan& plan) {
 }
 
 std::string encode_lights_plan(const LightsPlan& plan, size_t faces) {
-  std::string raw;
-  for (uint64_t v : {kLightsVersion, static_cast<uint64_t>(plan.seed), kFirstShotBlock,
-                     frame_blocks(lights_frames(plan)), uint64_t{faces}, uint64_t{plan.lines.size()}})
-    put_varint(raw, v);
+  std::string raw = plan_header(kLightsVersion, plan.seed, lights_frames(plan), faces, plan.lines.size());
   for (size_t e = 0; e < plan.lines.size(); ++e) {
     put_varint(raw, plan.lines[e]);
     put_varint(raw, plan.hashes[e]);
@@ -652,8 +657,7 @@ StoredShots store_shots(const Options& options, const PreparedScene& prepared, c
   // The lights' shot, where its lines do not depend on the threads (a
   // light's independent points are drawn per shard).
   const fs::path lights_path = dir / kStoredLightsFile;
-  std::vector<uint64_t> light_lines;
-  for (size_t l = 0; l < lights.size(); ++l) light_lines.push_back(light_line_count(lights[l], run.light_lines[l]));
+  const std::vector<uint64_t> light_lines = light_line_counts(lights, run.light_lines);
   const bool store_lights = !lights.empty() && options.first_shot.halton();
   if (store_lights) {
     uint64_t lines = 0;

@@ -38,8 +38,9 @@ class LightDistribution {
   double flux() const { return flux_; }
   // A direction drawn in proportion to I (of the bins), from three uniform numbers.
   void sample(double u1, double u2, double u3, double& theta, double& phi) const;
-  // A hash of what sample() draws from (the bins' cumulative intensity):
-  // equal for equal distributions, whatever file or multiplier gave them.
+  // A hash of what sample() draws from (the bins' cumulative intensity, as
+  // read: a table scaled otherwise hashes otherwise); PointLight's
+  // multiplier does not enter it.
   uint64_t sampling_hash() const;
 
  private:
