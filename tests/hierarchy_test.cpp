@@ -3,8 +3,10 @@
 // exact answers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 #include <numbers>
 #include <random>
 
@@ -20,6 +22,7 @@
 #include "luminaire.h"
 #include "line_budget.h"
 #include "line_tracing.h"
+#include "patch_tree.h"
 #include "pilot.h"
 #include "sampling.h"
 #include "scene_readers.h"
@@ -754,6 +757,61 @@ TEST(Hierarchy, OneObjectForTheWholeSceneIsSplitIntoItsConnectedParts) {
   }
 }
 
+// A large object's patch tree answers whether a box holds one of its
+// patches as asking every patch does: random boxes of every size (some flat,
+// some touching a patch's side exactly) against the furnished room's
+// patches, all of them in one tree and its shell's alone.
+TEST(PatchTree, FindsThePatchesABoxHoldsAsAskingEveryPatchDoes) {
+  const PatchMesh mesh = build_mesh(furnished_room(0.5, 0), 0.05);
+  std::vector<uint32_t> all(mesh.patches.size()), shell;
+  std::iota(all.begin(), all.end(), 0u);
+  for (uint32_t p : all)
+    if (mesh.patches[p].object == 0) shell.push_back(p);
+  ASSERT_GT(shell.size(), 64u);
+  auto meets = [&](const Bounds& box) {
+    return [&mesh, box](uint32_t p) {
+      const Patch& patch = mesh.patches[p];
+      const Vec3 &a = mesh.vertices[patch.v[0]], &b = mesh.vertices[patch.v[1]], &c = mesh.vertices[patch.v[2]];
+      return triangle_meets_box(a, b, c, box) || (!patch.is_triangle() && triangle_meets_box(a, c, mesh.vertices[patch.v[3]], box));
+    };
+  };
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  // Boxes over the room and a fifth of it around (the floor's patches lie on
+  // the room's side: only boxes reaching below it hold them).
+  const Vec3 lo = mesh.bounds.lo - mesh.bounds.size() * 0.2, size = mesh.bounds.size() * 1.4;
+  for (const std::vector<uint32_t>* patches : {&all, &shell}) {
+    const PatchTree tree(mesh, *patches);
+    int held = 0, asked = 0;
+    for (int k = 0; k < 4000; ++k) {
+      Bounds box;
+      for (int i = 0; i < 3; ++i) {
+        const double extent = k % 7 == 0 && i == k % 3 ? 0.0 : size[i] * std::pow(u(rng), 2);
+        box.lo[i] = lo[i] + u(rng) * (size[i] - extent);
+        box.hi[i] = box.lo[i] + extent;
+      }
+      if (k % 5 == 0) {  // a side on a patch's corner
+        const Vec3& v = mesh.vertices[mesh.patches[(*patches)[k % patches->size()]].v[0]];
+        box.lo[k % 3] = v[k % 3];
+        box.hi[k % 3] = std::max(box.hi[k % 3], v[k % 3]);
+      }
+      const bool expected = std::any_of(patches->begin(), patches->end(), meets(box));
+      int calls = 0;
+      const auto f = meets(box);
+      const bool found = tree.any_near(box, [&](uint32_t p) {
+        ++calls;
+        return f(p);
+      });
+      ASSERT_EQ(found, expected) << "box " << k;
+      held += expected;
+      asked += calls;
+    }
+    EXPECT_GT(held, 400) << patches->size();   // boxes that hold patches, and
+    EXPECT_LT(held, 3600) << patches->size();  // boxes that hold none
+    EXPECT_LT(asked, 4000 * static_cast<int>(patches->size()) / 20);  // far fewer patches asked than all
+  }
+}
+
 // A random room of boxes of every size (flat, thin, tiny, large, touching,
 // overlapping), the same for the same seed.
 Scene random_room(unsigned seed) {
@@ -801,6 +859,24 @@ TEST(Hierarchy, TheGridBuildsTheHierarchyThatComparingEveryPairBuilds) {
     }
   }
   EXPECT_GT(subscenes, 24u);  // the layouts do group
+  // Every polygon an object of its own (as some exporters write a file, and
+  // a triangle soup's connected parts): coplanar neighbours are tried as
+  // flat boxes and refused, groups swallow hundreds of items and the grid's
+  // emptied cells are pruned as they go.
+  size_t single_subscenes = 0;
+  for (unsigned seed = 1; seed <= 6; ++seed) {
+    Scene scene = random_room(seed);
+    scene.objects.clear();
+    for (size_t p = 0; p < scene.polygons.size(); ++p)
+      scene.polygons[p].object = test::add_object(scene, fmt::format("p{}", p));
+    const PatchMesh mesh = build_mesh(scene, 0.05);
+    for (const int depth : {1, 3}) {
+      HierarchyOptions o;
+      o.max_depth = depth;
+      single_subscenes += same(mesh, o, "single polygons, seed " + std::to_string(seed) + ", depth " + std::to_string(depth)) - 1;
+    }
+  }
+  EXPECT_GT(single_subscenes, 12u);
   // Pairs near the farthest apart that still group: equal cubes of side a
   // group up to 5 a apart (quotient 6 / (5 + 2 d / a) > 0.4), flat squares
   // side by side up to about 1.5 a apart.

@@ -3,6 +3,7 @@
 #include "hierarchy.h"
 
 #include "error.h"
+#include "patch_tree.h"
 
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -96,8 +97,11 @@ class LooseGrid {
     const Vec3 c = b.center();
     Cell k{};
     for (int i = 0; i < 3; ++i) k[i] = clamp_cell(std::floor((c[i] - origin_[i]) / cell), level);
-    levels_[level][key(k)].ids.push_back(id);
-    // The chain of ancestors up to the coarsest level, each knowing its child.
+    Node* node = &levels_[level][key(k)];
+    node->ids.push_back(id);
+    // The chain of ancestors up to the coarsest level, each knowing its child
+    // (a map's nodes stay where they are, so a parent holds its children's
+    // addresses and a query descends without hashing).
     for (int l = level; l < kLevels; ++l) {
       Cell parent{};
       int bit = 0;
@@ -106,19 +110,25 @@ class LooseGrid {
         bit |= int(k[i] - 2 * parent[i]) << i;
       }
       Node& up = levels_[l + 1][key(parent)];
-      const bool known = up.children & (1u << bit);
-      up.children |= uint8_t(1u << bit);
+      const bool known = up.child[bit] != nullptr;
+      up.child[bit] = node;
       if (known) break;
       k = parent;
+      node = &up;
     }
   }
 
   // Calls f(id) for every box whose cell's grown extent meets `r`, after
   // dropping from the visited cells every id `dead(id)` names (each is
-  // dropped once, so the grid does not fill with dead items).
+  // dropped once, so the grid does not fill with dead items). A cell left
+  // with no id and no occupied child is unlinked from its parent and
+  // dropped, so that later queries no longer descend through the emptied
+  // cells under a large group (the items it swallowed): without that, a
+  // query over a group of n dead items walked their n cells again each
+  // time, and scenes of a million single-polygon objects took minutes.
   template <typename Dead, typename F>
   void query(const Bounds& r, const Dead& dead, const F& f) {
-    visit_cells(levels_, r, [&](std::vector<int>& ids) {
+    visit_cells<true>(levels_, r, [&](std::vector<int>& ids) {
       ids.erase(std::remove_if(ids.begin(), ids.end(), dead), ids.end());
       for (int id : ids) f(id);
     });
@@ -135,13 +145,15 @@ class LooseGrid {
   static constexpr int kLevels = 20;  // the finest cells: a millionth of the scene's diagonal
   using Cell = std::array<long long, 3>;
   struct Node {
-    std::vector<int> ids;  // boxes of this level whose centre is in the cell
-    uint8_t children = 0;  // bit x + 2y + 4z: the child cell (2k + (x, y, z)) is occupied
+    std::vector<int> ids;            // boxes of this level whose centre is in the cell
+    std::array<Node*, 8> child{};    // [x + 2y + 4z]: the child cell (2k + (x, y, z)) if occupied
   };
   using Levels = std::array<std::unordered_map<uint64_t, Node>, kLevels + 1>;
 
-  // visit(ids) for the cells of `levels` (const or not) whose grown extent meets `r`.
-  template <typename L, typename V>
+  // visit(ids) for the cells of `levels` (const or not) whose grown extent
+  // meets `r`; `prune`: cells that end up empty (no ids, no occupied child)
+  // are unlinked from their parents and erased.
+  template <bool prune = false, typename L, typename V>
   void visit_cells(L& levels, const Bounds& r, const V& visit) const {
     std::array<Cell, kLevels + 1> lo{}, hi{};  // per level: the cells in range
     for (int level = 0; level <= kLevels; ++level) {
@@ -156,17 +168,33 @@ class LooseGrid {
         if (c[i] < lo[level][i] || c[i] > hi[level][i]) return false;
       return true;
     };
-    // Depth first from each coarsest cell in range, into occupied children in range.
-    auto descend = [&](auto& self, int level, const Cell& c, auto& node) -> void {
+    // Depth first from each coarsest cell in range, into occupied children in
+    // range; returns whether the cell is empty now (pruning only).
+    auto descend = [&](auto& self, int level, const Cell& c, auto& node) -> bool {
       if (!node.ids.empty()) visit(node.ids);
-      if (level == 0 || node.children == 0) return;
-      for (int bit = 0; bit < 8; ++bit) {
-        if (!(node.children & (1u << bit))) continue;
-        const Cell child{2 * c[0] + (bit & 1), 2 * c[1] + ((bit >> 1) & 1), 2 * c[2] + ((bit >> 2) & 1)};
-        if (!in_range(level - 1, child)) continue;
-        const auto it = levels[level - 1].find(key(child));
-        if (it != levels[level - 1].end()) self(self, level - 1, child, it->second);
+      bool occupied = false;
+      if (level > 0) {
+        for (int bit = 0; bit < 8; ++bit) {
+          if (!node.child[bit]) continue;
+          const Cell child{2 * c[0] + (bit & 1), 2 * c[1] + ((bit >> 1) & 1), 2 * c[2] + ((bit >> 2) & 1)};
+          if (!in_range(level - 1, child)) {
+            occupied = true;
+            continue;
+          }
+          const bool emptied = self(self, level - 1, child, *node.child[bit]);
+          if constexpr (prune) {
+            if (emptied) {
+              // An insert below it later links the chain again (insert sets
+              // the children it finds unset up to the first one set).
+              levels[level - 1].erase(key(child));
+              node.child[bit] = nullptr;
+              continue;
+            }
+          }
+          occupied = true;
+        }
       }
+      return prune && node.ids.empty() && !occupied;
     };
     for (auto& [k, node] : levels[kLevels]) {
       const Cell c = unkey(k);
@@ -197,7 +225,6 @@ class LooseGrid {
 struct Item {
   Bounds bounds;
   double area = 0;
-  bool alive = true;
   int object = -1;  // for an object item
   // For a group: its direct members (items), and the quotient that formed it.
   std::vector<int> members;
@@ -246,6 +273,7 @@ class Builder {
         continue;
       }
       items_.push_back(std::move(item));
+      alive_.push_back(1);
     }
     plain_ = std::make_unique<LooseGrid>(mesh.bounds);
     reach_ = std::make_unique<LooseGrid>(mesh.bounds);
@@ -336,7 +364,7 @@ class Builder {
         c = queue_.top();
         queue_.pop();
       }
-      if (!items_[c.a].alive || !items_[c.b].alive) continue;
+      if (!alive_[c.a] || !alive_[c.b]) continue;
       try_group(c);
     }
   }
@@ -350,7 +378,7 @@ class Builder {
     std::vector<int> top;
     root.objects = shell_;
     for (size_t i = 0; i < items_.size(); ++i)
-      if (items_[i].alive) top.push_back(static_cast<int>(i));
+      if (alive_[i]) top.push_back(static_cast<int>(i));
     place(h, 0, top, scene_area_);
     // Deeper than max_depth: dissolved into the ancestor at max_depth.
     return complete(std::move(h));
@@ -474,7 +502,7 @@ class Builder {
   // Whether an item is no longer alive (merged into a group), for the grids'
   // queries: a lambda, not a std::function, so that it is inlined.
   auto dead() const {
-    return [this](int i) { return !items_[i].alive; };
+    return [this](int i) { return !alive_[i]; };
   }
 
   // Candidates of the new item `id` with every living item before it.
@@ -482,7 +510,7 @@ class Builder {
     Candidate c;
     if (all_pairs_) {
       for (int i = 0; i < id; ++i)
-        if (items_[i].alive && candidate(i, id, c)) queue_.push(c);
+        if (alive_[i] && candidate(i, id, c)) queue_.push(c);
       return;
     }
     seen_.resize(items_.size(), 0);
@@ -498,19 +526,35 @@ class Builder {
   }
 
   // Living items, not members and not yet `seen_`, whose boxes may meet one of
-  // `regions`; marked seen and added to `out`.
-  void near_regions(const std::vector<Bounds>& regions, std::vector<int>& out) {
-    auto take = [&](int i) {
-      if (!seen_[i] && !member_[i] && items_[i].alive) {
-        seen_[i] = 1;
-        touched_.push_back(i);
-        out.push_back(i);
-      }
-    };
+  // `regions`; marked seen and added to `out`. With the grid, only items
+  // whose boxes come within 2 eps of `box` (the group's box as it is now,
+  // holding the regions): the grid's cells return many more (a cell's items
+  // anywhere in it), and an item farther away cannot reach into the box
+  // before it grows towards it, when the slabs it grows by find the item
+  // (it is not marked seen). Without this filter a scene of a million
+  // single-polygon objects, whose coplanar neighbours are tried as flat
+  // boxes and refused, visited 1,200 items per try (the all-pairs build,
+  // the tests' reference, keeps every item).
+  void near_regions(const std::vector<Bounds>& regions, const Bounds& box, std::vector<int>& out) {
     if (all_pairs_) {
-      for (size_t i = 0; i < items_.size(); ++i) take(static_cast<int>(i));
+      for (size_t i = 0; i < items_.size(); ++i)
+        if (!seen_[i] && !member_[i] && alive_[i]) {
+          seen_[i] = 1;
+          touched_.push_back(static_cast<int>(i));
+          out.push_back(static_cast<int>(i));
+        }
       return;
     }
+    const double margin = 2 * eps_;
+    auto take = [&](int i) {
+      if (seen_[i] || member_[i]) return;
+      const Bounds& b = items_[i].bounds;
+      for (int k = 0; k < 3; ++k)
+        if (b.hi[k] < box.lo[k] - margin || b.lo[k] > box.hi[k] + margin) return;
+      seen_[i] = 1;
+      touched_.push_back(i);
+      out.push_back(i);
+    };
     for (const Bounds& r : regions) plain_->query(r, dead(), take);
   }
 
@@ -540,16 +584,23 @@ class Builder {
       inner.lo[i] += eps_;
       inner.hi[i] -= eps_;
     }
-    for (uint32_t p : object_patches_[object]) {
+    auto meets = [&](uint32_t p) {
       const Patch& patch = mesh_.patches[p];
       const Vec3& a = mesh_.vertices[patch.v[0]];
       const Vec3& b = mesh_.vertices[patch.v[1]];
       const Vec3& c = mesh_.vertices[patch.v[2]];
-      if (triangle_meets_box(a, b, c, inner)) return true;
-      if (!patch.is_triangle() && triangle_meets_box(a, c, mesh_.vertices[patch.v[3]], inner)) return true;
-    }
-    return false;
+      return triangle_meets_box(a, b, c, inner) ||
+             (!patch.is_triangle() && triangle_meets_box(a, c, mesh_.vertices[patch.v[3]], inner));
+    };
+    const std::vector<uint32_t>& patches = object_patches_[object];
+    if (patches.size() <= kTreePatches) return std::any_of(patches.begin(), patches.end(), meets);
+    if (object_trees_.size() < object_patches_.size()) object_trees_.resize(object_patches_.size());
+    std::unique_ptr<PatchTree>& tree = object_trees_[static_cast<size_t>(object)];
+    if (!tree) tree = std::make_unique<PatchTree>(mesh_, patches);
+    return tree->any_near(inner, meets);
   }
+  // Objects with more patches than this ask a PatchTree whether a box holds one.
+  static constexpr size_t kTreePatches = 64;
 
   void try_group(const Candidate& c) {
     std::vector<int> members = {c.a, c.b};
@@ -581,7 +632,7 @@ class Builder {
       grew = false;
       forget_seen();
       pending.clear();
-      near_regions({box}, pending);
+      near_regions({box}, box, pending);
       std::make_heap(pending.begin(), pending.end(), std::greater<int>());
       while (!pending.empty()) {
         std::pop_heap(pending.begin(), pending.end(), std::greater<int>());
@@ -597,7 +648,7 @@ class Builder {
         grew = true;
         // The larger box may meet items after this one that it did not meet before.
         found.clear();
-        near_regions(slabs(before, box), found);
+        near_regions(slabs(before, box), box, found);
         for (int j : found)
           if (j > i) {
             pending.push_back(j);
@@ -619,7 +670,7 @@ class Builder {
     group.quotient = c.q;
     for (int m : members) {
       Item& it = items_[m];
-      it.alive = false;
+      alive_[m] = 0;
       if (it.object < 0 && group.area < kAbsorbGrowth * it.area) {
         group.members.insert(group.members.end(), it.members.begin(), it.members.end());
         group.quotient = std::max(group.quotient, it.quotient);
@@ -628,6 +679,7 @@ class Builder {
       }
     }
     items_.push_back(std::move(group));
+    alive_.push_back(1);
     return true;
   }
 
@@ -802,7 +854,9 @@ class Builder {
   std::vector<uint32_t> polygon_stamp_;  // per polygon: the count that last met it (start_polygon_count)
   uint32_t stamp_ = 0;
   std::vector<Bounds> object_bounds_;
+  mutable std::vector<std::unique_ptr<PatchTree>> object_trees_;  // per object, made when first asked (object_meets)
   std::vector<Item> items_;
+  std::vector<uint8_t> alive_;  // per item: not yet merged into a group (apart from items_: the grouping loop and the grids' queries test it for every candidate)
   std::vector<int> shell_;  // objects of the scene's shell
   std::priority_queue<Candidate> queue_;
   std::vector<uint8_t> member_;  // try_group's scratch: items in the box being formed (all 0 between calls)
