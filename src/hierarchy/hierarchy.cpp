@@ -225,6 +225,7 @@ class LooseGrid {
 struct Item {
   Bounds bounds;
   double area = 0;
+  bool alive = true;
   int object = -1;  // for an object item
   // For a group: its direct members (items), and the quotient that formed it.
   std::vector<int> members;
@@ -254,6 +255,7 @@ class Builder {
       for (size_t k = 1; k < parts.size(); ++k) object_patches_.push_back(std::move(parts[k]));
     }
     objects = static_cast<int>(object_patches_.size());
+    object_trees_.resize(objects);
     object_polygons_.resize(objects);
     for (int o = 0; o < objects; ++o) {
       start_polygon_count();
@@ -273,7 +275,6 @@ class Builder {
         continue;
       }
       items_.push_back(std::move(item));
-      alive_.push_back(1);
     }
     plain_ = std::make_unique<LooseGrid>(mesh.bounds);
     reach_ = std::make_unique<LooseGrid>(mesh.bounds);
@@ -380,7 +381,7 @@ class Builder {
         c = queue_.top();
         queue_.pop();
       }
-      if (!alive_[c.a] || !alive_[c.b]) continue;
+      if (!items_[c.a].alive || !items_[c.b].alive) continue;
       try_group(c);
     }
   }
@@ -394,7 +395,7 @@ class Builder {
     std::vector<int> top;
     root.objects = shell_;
     for (size_t i = 0; i < items_.size(); ++i)
-      if (alive_[i]) top.push_back(static_cast<int>(i));
+      if (items_[i].alive) top.push_back(static_cast<int>(i));
     place(h, 0, top, scene_area_);
     // Deeper than max_depth: dissolved into the ancestor at max_depth.
     return complete(std::move(h));
@@ -518,7 +519,7 @@ class Builder {
   // Whether an item is no longer alive (merged into a group), for the grids'
   // queries: a lambda, not a std::function, so that it is inlined.
   auto dead() const {
-    return [this](int i) { return !alive_[i]; };
+    return [this](int i) { return !items_[i].alive; };
   }
 
   // Candidates of the new item `id` with every living item before it.
@@ -526,7 +527,7 @@ class Builder {
     Candidate c;
     if (all_pairs_) {
       for (int i = 0; i < id; ++i)
-        if (alive_[i] && candidate(i, id, c)) queue_.push(c);
+        if (items_[i].alive && candidate(i, id, c)) queue_.push(c);
       return;
     }
     seen_.resize(items_.size(), 0);
@@ -552,13 +553,14 @@ class Builder {
   // boxes and refused, visited 1,200 items per try (the all-pairs build,
   // the tests' reference, keeps every item).
   void near_regions(const std::vector<Bounds>& regions, const Bounds& box, std::vector<int>& out) {
+    auto mark = [&](int i) {
+      seen_[i] = 1;
+      touched_.push_back(i);
+      out.push_back(i);
+    };
     if (all_pairs_) {
-      for (size_t i = 0; i < items_.size(); ++i)
-        if (!seen_[i] && !member_[i] && alive_[i]) {
-          seen_[i] = 1;
-          touched_.push_back(static_cast<int>(i));
-          out.push_back(static_cast<int>(i));
-        }
+      for (int i = 0; i < static_cast<int>(items_.size()); ++i)
+        if (!seen_[i] && !member_[i] && items_[i].alive) mark(i);
       return;
     }
     const double margin = 2 * eps_;
@@ -567,9 +569,7 @@ class Builder {
       const Bounds& b = items_[i].bounds;
       for (int k = 0; k < 3; ++k)
         if (b.hi[k] < box.lo[k] - margin || b.lo[k] > box.hi[k] + margin) return;
-      seen_[i] = 1;
-      touched_.push_back(i);
-      out.push_back(i);
+      mark(i);
     };
     for (const Bounds& r : regions) plain_->query(r, dead(), take);
   }
@@ -610,7 +610,6 @@ class Builder {
     };
     const std::vector<uint32_t>& patches = object_patches_[object];
     if (patches.size() <= kTreePatches) return std::any_of(patches.begin(), patches.end(), meets);
-    if (object_trees_.size() < object_patches_.size()) object_trees_.resize(object_patches_.size());
     std::unique_ptr<PatchTree>& tree = object_trees_[static_cast<size_t>(object)];
     if (!tree) tree = std::make_unique<PatchTree>(mesh_, patches);
     return tree->any_near(inner, meets);
@@ -686,7 +685,7 @@ class Builder {
     group.quotient = c.q;
     for (int m : members) {
       Item& it = items_[m];
-      alive_[m] = 0;
+      it.alive = false;
       if (it.object < 0 && group.area < kAbsorbGrowth * it.area) {
         group.members.insert(group.members.end(), it.members.begin(), it.members.end());
         group.quotient = std::max(group.quotient, it.quotient);
@@ -695,7 +694,6 @@ class Builder {
       }
     }
     items_.push_back(std::move(group));
-    alive_.push_back(1);
     return true;
   }
 
@@ -872,7 +870,6 @@ class Builder {
   std::vector<Bounds> object_bounds_;
   mutable std::vector<std::unique_ptr<PatchTree>> object_trees_;  // per object, made when first asked (object_meets)
   std::vector<Item> items_;
-  std::vector<uint8_t> alive_;  // per item: not yet merged into a group (apart from items_: the grouping loop and the grids' queries test it for every candidate)
   std::vector<int> shell_;  // objects of the scene's shell
   std::priority_queue<Candidate> queue_;
   std::vector<uint8_t> member_;  // try_group's scratch: items in the box being formed (all 0 between calls)
