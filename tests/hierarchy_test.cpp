@@ -918,6 +918,71 @@ TEST(Hierarchy, TheGridBuildsTheHierarchyThatComparingEveryPairBuilds) {
   }
 }
 
+// A new group's partners larger than itself are found in the grid of
+// reaches, only at levels whose cells can hold such a reach: random pairs of
+// small cubes (a group at once) beside flat panels larger than the pair, at
+// random sizes, turns and distances up to past the farthest that still
+// groups (a flat square's reach spans 9 of its sides), give the boxes that
+// comparing every pair gives.
+TEST(Hierarchy, TheGridFindsTheLargerPartnersOfANewGroup) {
+  size_t grouped_with_panel = 0;
+  for (unsigned seed = 1; seed <= 24; ++seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    Scene scene;
+    const int m = test::add_material(scene, "grey", 0.5, 0);
+    test::add_box(scene, {0, 0, 0}, {40, 40, 10}, true, m, test::add_object(scene, "room"));
+    for (int k = 0; k < 16; ++k) {
+      const double a = 0.03 + 0.05 * u(rng), x = 2 + 9 * (k % 4), y = 2 + 9 * (k / 4), z = 3;
+      for (const double x0 : {x, x + 1.2 * a}) {  // a pair of cubes, each with a cube inside (24 polygons)
+        const int object = test::add_object(scene, fmt::format("cube{}_{}", k, x0 == x ? 'a' : 'b'));
+        test::add_box(scene, {x0, y, z}, {x0 + a, y + a, z + a}, false, m, object);
+        test::add_box(scene, {x0 + 0.25 * a, y + 0.25 * a, z + 0.25 * a}, {x0 + 0.75 * a, y + 0.75 * a, z + 0.75 * a},
+                      false, m, object);
+      }
+      // A square panel of 1.2 to 400 times the pair's area (log-uniform),
+      // flat along a random axis, d from the pair's box: the large ones lie
+      // beyond the pair's own reach, within the panel's.
+      const double pair_area = 2 * (2.2 * a * a + 2.2 * a * a + a * a);
+      const double s = std::sqrt(1.2 * std::pow(400 / 1.2, u(rng)) * pair_area / 2), d = s * u(rng);
+      const int axis = static_cast<int>(3 * u(rng)) % 3;
+      Vec3 lo{x, y, z};
+      lo[axis] += (axis == 0 ? 2.2 * a : a) + d;
+      Vec3 c[4] = {lo, lo, lo, lo};
+      const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+      c[1][i] += s;
+      c[2][i] += s;
+      c[2][j] += s;
+      c[3][j] += s;
+      test::add_quad(scene, c[0], c[1], c[2], c[3], m, test::add_object(scene, fmt::format("panel{}", k)));
+      // And a pair of cubes with a larger cube beside it, 1 to 2 times the
+      // pair's area, 6 to 14 sides of the small cubes away: the pair's
+      // reach for partners of its own area stops about 11 sides away, the
+      // larger cube's own reach spans 13 of its sides.
+      const double b = a * std::sqrt((1 + u(rng)) * pair_area / (6 * a * a)), gap = a * (6 + 8 * u(rng));
+      const double y2 = y + 4;
+      for (const double x0 : {x, x + 1.2 * a}) {
+        const int object = test::add_object(scene, fmt::format("twin{}_{}", k, x0 == x ? 'a' : 'b'));
+        test::add_box(scene, {x0, y2, z}, {x0 + a, y2 + a, z + a}, false, m, object);
+        test::add_box(scene, {x0 + 0.25 * a, y2 + 0.25 * a, z + 0.25 * a}, {x0 + 0.75 * a, y2 + 0.75 * a, z + 0.75 * a},
+                      false, m, object);
+      }
+      test::add_box(scene, {x + 2.2 * a + gap, y2, z}, {x + 2.2 * a + gap + b, y2 + b, z + b}, false, m,
+                    test::add_object(scene, fmt::format("big{}", k)));
+    }
+    const PatchMesh mesh = build_mesh(scene, 1.0);
+    HierarchyOptions o;
+    o.max_depth = 3;
+    const Hierarchy grid = build_hierarchy(mesh, o, false);
+    const Hierarchy all = build_hierarchy(mesh, o, false, true);
+    ASSERT_EQ(describe_hierarchy(grid, {}), describe_hierarchy(all, {})) << "seed " << seed;
+    ASSERT_EQ(grid.patch_box, all.patch_box) << "seed " << seed;
+    for (const SceneBox& box : grid.boxes)  // a pair and its panel, or a panel around the pair's box
+      if (box.objects.size() == 3 || (box.objects.size() == 1 && box.children.size() == 1)) ++grouped_with_panel;
+  }
+  EXPECT_GT(grouped_with_panel, 50u);  // the panels do join their pairs, often
+}
+
 // A store records what grouping decided (hierarchy_layout) and the solver
 // assembles the hierarchy from it without grouping again: the same boxes on
 // random rooms; a layout that cannot be the mesh's is refused by name.

@@ -88,7 +88,9 @@ class LooseGrid {
     base_ = std::max(scene.diagonal(), 1e-30) / double(1 << kLevels);
   }
 
-  void insert(int id, const Bounds& b) {
+  // `tag`: a number the caller keeps with the box (rounded down to a float),
+  // handed to the callers of the const query.
+  void insert(int id, const Bounds& b, double tag = 0) {
     const Vec3 s = b.size();
     const double extent = std::max({s.x, s.y, s.z, 0.0});
     int level = 0;
@@ -98,7 +100,7 @@ class LooseGrid {
     Cell k{};
     for (int i = 0; i < 3; ++i) k[i] = clamp_cell(std::floor((c[i] - origin_[i]) / cell), level);
     Node* node = &levels_[level][key(k)];
-    node->ids.push_back(id);
+    node->entries.push_back(entry(id, b, tag));
     // The chain of ancestors up to the coarsest level, each knowing its child
     // (a map's nodes stay where they are, so a parent holds its children's
     // addresses and a query descends without hashing).
@@ -118,49 +120,115 @@ class LooseGrid {
     }
   }
 
-  // Calls f(id) for every box whose cell's grown extent meets `r`, after
-  // dropping from the visited cells every id `dead(id)` names (each is
-  // dropped once, so the grid does not fill with dead items). A cell left
-  // with no id and no occupied child is unlinked from its parent and
-  // dropped, so that later queries no longer descend through the emptied
-  // cells under a large group (the items it swallowed): without that, a
-  // query over a group of n dead items walked their n cells again each
-  // time, and scenes of a million single-polygon objects took minutes.
+  // Calls f(id) for every box that meets `r` (its bounds, rounded outwards
+  // to floats, kept beside its id in its cell: a cell's ids are tested
+  // without reading the caller's items), after dropping from the visited
+  // cells every id meeting `r` that `dead(id)` names (each is dropped once,
+  // so the grid does not fill with dead items). A cell left with no id and
+  // no occupied child is unlinked from its parent and dropped, so that later
+  // queries no longer descend through the emptied cells under a large group
+  // (the items it swallowed): without that, a query over a group of n dead
+  // items walked their n cells again each time, and scenes of a million
+  // single-polygon objects took minutes.
   template <typename Dead, typename F>
   void query(const Bounds& r, const Dead& dead, const F& f) {
-    visit_cells<true>(levels_, r, [&](std::vector<int>& ids) {
-      ids.erase(std::remove_if(ids.begin(), ids.end(), dead), ids.end());
-      for (int id : ids) f(id);
+    query(everywhere(r), dead, f);
+  }
+
+  static constexpr int kLevels = 20;  // the finest cells: a millionth of the scene's diagonal
+
+  // A query's region level by level: the boxes of level l's cells are looked
+  // for where they meet at[l], and levels below min_level are skipped. A
+  // level's cells hold boxes no larger than the cell, so a caller that knows
+  // how far a box of that size can lie (a small partner lies closer) asks
+  // less of the fine levels. The regions must grow with the level (at[l]
+  // within at[l + 1]): a query descends into a cell only where its grown
+  // extent meets the region of the cell's level.
+  struct Region {
+    std::array<Bounds, kLevels + 1> at;
+    int min_level = 0;
+  };
+  static Region everywhere(const Bounds& r) {
+    Region out;
+    out.at.fill(r);
+    return out;
+  }
+  // The size of a level's cells: the largest box its cells hold.
+  double cell_size(int level) const { return base_ * double(1 << level); }
+
+  template <typename Dead, typename F>
+  void query(const Region& r, const Dead& dead, const F& f) {
+    visit_cells<true>(levels_, r, [&](int level, std::vector<Entry>& entries) {
+      const Bounds& at = r.at[level];
+      size_t kept = 0;
+      for (const Entry& e : entries) {
+        if (meets(e, at)) {
+          if (dead(e.id)) continue;
+          f(e.id);
+        }
+        entries[kept++] = e;
+      }
+      entries.resize(kept);
     });
   }
-  // The same, dropping nothing (threads may query at once).
+  // The same, dropping nothing (threads may query at once), as f(id, tag):
+  // a caller can skip a box by its tag without reading its own record of it.
   template <typename F>
-  void query(const Bounds& r, const F& f) const {
-    visit_cells(levels_, r, [&](const std::vector<int>& ids) {
-      for (int id : ids) f(id);
+  void query(const Region& r, const F& f) const {
+    visit_cells(levels_, r, [&](int level, const std::vector<Entry>& entries) {
+      const Bounds& at = r.at[level];
+      for (const Entry& e : entries)
+        if (meets(e, at)) f(e.id, e.tag);
     });
   }
 
  private:
-  static constexpr int kLevels = 20;  // the finest cells: a millionth of the scene's diagonal
+  // A box in a cell: its id, tag and bounds (floats, the bounds rounded
+  // outwards, the tag down): 32 bytes.
+  struct Entry {
+    int id;
+    float tag;
+    std::array<float, 3> lo, hi;
+  };
+  static Entry entry(int id, const Bounds& b, double tag) {
+    Entry e{id, static_cast<float>(tag), {}, {}};
+    if (e.tag > tag) e.tag = std::nextafter(e.tag, -INFINITY);
+    for (int i = 0; i < 3; ++i) {
+      e.lo[i] = static_cast<float>(b.lo[i]);
+      if (e.lo[i] > b.lo[i]) e.lo[i] = std::nextafter(e.lo[i], -INFINITY);
+      e.hi[i] = static_cast<float>(b.hi[i]);
+      if (e.hi[i] < b.hi[i]) e.hi[i] = std::nextafter(e.hi[i], INFINITY);
+    }
+    return e;
+  }
+  static bool meets(const Entry& e, const Bounds& r) {
+    for (int i = 0; i < 3; ++i)
+      if (e.hi[i] < r.lo[i] || e.lo[i] > r.hi[i]) return false;
+    return true;
+  }
   using Cell = std::array<long long, 3>;
   struct Node {
-    std::vector<int> ids;            // boxes of this level whose centre is in the cell
+    std::vector<Entry> entries;      // boxes of this level whose centre is in the cell
     std::array<Node*, 8> child{};    // [x + 2y + 4z]: the child cell (2k + (x, y, z)) if occupied
   };
   using Levels = std::array<std::unordered_map<uint64_t, Node>, kLevels + 1>;
 
-  // visit(ids) for the cells of `levels` (const or not) whose grown extent
-  // meets `r`; `prune`: cells that end up empty (no ids, no occupied child)
-  // are unlinked from their parents and erased.
+  // visit(level, entries) for the cells of `levels` (const or not) whose
+  // grown extent meets `r`; `prune`: cells that end up empty (no entries, no
+  // occupied child) are unlinked from their parents and erased.
   template <bool prune = false, typename L, typename V>
-  void visit_cells(L& levels, const Bounds& r, const V& visit) const {
+  void visit_cells(L& levels, const Region& r, const V& visit) const {
     std::array<Cell, kLevels + 1> lo{}, hi{};  // per level: the cells in range
-    for (int level = 0; level <= kLevels; ++level) {
-      const double cell = base_ * double(1 << level);
+    for (int level = r.min_level; level <= kLevels; ++level) {
+      const double cell = cell_size(level);
       for (int i = 0; i < 3; ++i) {
-        lo[level][i] = clamp_cell(std::floor((r.lo[i] - origin_[i]) / cell - 1.5), level);
-        hi[level][i] = clamp_cell(std::floor((r.hi[i] - origin_[i]) / cell + 0.5), level);
+        // Cell k grown by half a cell, [k - 1/2, k + 3/2] cells, meets the
+        // region where k >= lo - 3/2 and k <= hi + 1/2: two cells a side
+        // for a point (floor for the first, as before December 2026, took
+        // three: 27 cells a level instead of 8). The millionth of a cell
+        // to spare covers the rounding of a centre's cell.
+        lo[level][i] = clamp_cell(std::ceil((r.at[level].lo[i] - origin_[i]) / cell - 1.5 - 1e-6), level);
+        hi[level][i] = clamp_cell(std::floor((r.at[level].hi[i] - origin_[i]) / cell + 0.5 + 1e-6), level);
       }
     }
     auto in_range = [&](int level, const Cell& c) {
@@ -171,9 +239,11 @@ class LooseGrid {
     // Depth first from each coarsest cell in range, into occupied children in
     // range; returns whether the cell is empty now (pruning only).
     auto descend = [&](auto& self, int level, const Cell& c, auto& node) -> bool {
-      if (!node.ids.empty()) visit(node.ids);
-      bool occupied = false;
-      if (level > 0) {
+      if (!node.entries.empty()) visit(level, node.entries);
+      // Below min_level nothing is looked at: children there stay.
+      bool occupied = level == r.min_level && std::any_of(node.child.begin(), node.child.end(),
+                                                           [](const auto* child) { return child != nullptr; });
+      if (level > r.min_level) {
         for (int bit = 0; bit < 8; ++bit) {
           if (!node.child[bit]) continue;
           const Cell child{2 * c[0] + (bit & 1), 2 * c[1] + ((bit >> 1) & 1), 2 * c[2] + ((bit >> 2) & 1)};
@@ -194,7 +264,7 @@ class LooseGrid {
           occupied = true;
         }
       }
-      return prune && node.ids.empty() && !occupied;
+      return prune && node.entries.empty() && !occupied;
     };
     for (auto& [k, node] : levels[kLevels]) {
       const Cell c = unkey(k);
@@ -328,6 +398,7 @@ class Builder {
   void group(bool all_pairs) {
     all_pairs_ = all_pairs;
     const int n = static_cast<int>(items_.size());
+    gone_.assign((items_.size() + 63) / 64, 0);
     for (int i = 0; i < n; ++i) index_item(i);
     // Every pair once, on every thread; the queue orders candidates totally
     // (quotient, then indices), so the grouping does not depend on threads
@@ -343,47 +414,23 @@ class Builder {
       }
       // Each pair from the side of its larger item, whose reach holds the smaller.
       if (!(items_[a].area > 0)) return;
-      std::as_const(*plain_).query(reach(a), [&](int b) {
-        if (b >= n || b == a) return;
+      std::as_const(*plain_).query(smaller_reach(a), [&](int b, float area) {
+        // (A tag above a's area is a larger item's, known without reading it.)
+        if (b >= n || b == a || area > items_[a].area) return;
         if (items_[b].area > items_[a].area || (items_[b].area == items_[a].area && b < a)) return;
         if (candidate(std::min(a, b), std::max(a, b), c)) local.push_back(c);
       });
     });
-    // The first candidates, each thread's list sorted best first (the lists
-    // side by side), and the ones new groups bring in a queue: the best of
-    // the lists' fronts and the queue is taken each time, the same order as
-    // one queue of all (the order is total), without popping a heap of every
-    // pair (a quarter of OFFICE's build did that) or copying the lists into
-    // one (with an object per polygon, 48 pairs a polygon: 850 MB at 1.1M
-    // polygons).
-    std::vector<std::vector<Candidate>*> lists;
-    for (auto& local : found)
-      if (!local.empty()) lists.push_back(&local);
-    for (std::vector<Candidate>* list : lists)
-      tbb::parallel_sort(list->begin(), list->end(), [](const Candidate& x, const Candidate& y) { return y < x; });
-    struct Front {
-      Candidate c;
-      size_t list;
-      bool operator<(const Front& o) const { return c < o.c; }
-    };
-    std::priority_queue<Front> fronts;
-    std::vector<size_t> next(lists.size(), 0);
-    for (size_t k = 0; k < lists.size(); ++k) fronts.push({lists[k]->front(), k});
+    // The first candidates: each thread's list sorted in place, a run of
+    // its own (not copied into one list: with an object per polygon, 48
+    // pairs a polygon, 850 MB at 1.1M polygons).
     queue_ = {};
-    while (!fronts.empty() || !queue_.empty()) {
-      Candidate c;
-      if (queue_.empty() || (!fronts.empty() && queue_.top() < fronts.top().c)) {
-        const size_t k = fronts.top().list;
-        c = fronts.top().c;
-        fronts.pop();
-        if (++next[k] < lists[k]->size()) fronts.push({(*lists[k])[next[k]], k});
-      } else {
-        c = queue_.top();
-        queue_.pop();
-      }
-      if (!items_[c.a].alive || !items_[c.b].alive) continue;
-      try_group(c);
+    for (auto& local : found) {
+      tbb::parallel_sort(local.begin(), local.end(), Candidate::best_first);
+      queue_.add_sorted(std::move(local));
     }
+    for (Candidate c; queue_.take(c);)
+      if (!gone(c.a) && !gone(c.b)) try_group(c);
   }
 
   Hierarchy finish() {
@@ -452,6 +499,51 @@ class Builder {
       if (a != o.a) return a > o.a;
       return b > o.b;
     }
+    static bool best_first(const Candidate& x, const Candidate& y) { return y < x; }
+  };
+
+  // The candidates waiting, in runs sorted best first (the first
+  // candidates, a run per thread; those of each new group, a run of its
+  // own), and a heap of the runs' fronts: taking the best front each time
+  // gives the order of one queue of all of them (the order is total). One
+  // binary heap of every candidate, sifted at random through tens of
+  // megabytes, took a quarter of OFFICE's build when it held the first
+  // candidates too, and most of the time of the pairs new groups bring
+  // (5.2M of them, a few hundred a group, on OFFICE tiled 3x3 with an
+  // object per polygon); the heap of fronts holds a run's best alone.
+  class CandidateQueue {
+   public:
+    void add_sorted(std::vector<Candidate> run) {
+      if (run.empty()) return;
+      fronts_.push({run.front(), runs_.size(), 0});
+      runs_.push_back(std::move(run));
+    }
+    void add(std::vector<Candidate> run) {
+      std::sort(run.begin(), run.end(), Candidate::best_first);
+      add_sorted(std::move(run));
+    }
+    // The best candidate left, taken out; false when none is left.
+    bool take(Candidate& c) {
+      if (fronts_.empty()) return false;
+      const Front f = fronts_.top();
+      fronts_.pop();
+      c = f.c;
+      std::vector<Candidate>& run = runs_[f.run];
+      if (f.next + 1 < run.size())
+        fronts_.push({run[f.next + 1], f.run, f.next + 1});
+      else
+        std::vector<Candidate>().swap(run);  // its memory back
+      return true;
+    }
+
+   private:
+    struct Front {
+      Candidate c;
+      size_t run, next;
+      bool operator<(const Front& o) const { return c < o.c; }
+    };
+    std::vector<std::vector<Candidate>> runs_;
+    std::priority_queue<Front> fronts_;
   };
 
   // The pair (a, b) as a candidate when its quotient passes the threshold.
@@ -471,10 +563,13 @@ class Builder {
   // merged box's area is below 2 A_a / threshold (and the max_share bound),
   // and a box holding a's box with that area extends along axis i at most
   // (area / 2 - a_j a_k) / (a_j + a_k).
-  Bounds reach(int a) const {
+  Bounds reach(int a) const { return reach(a, items_[a].area); }
+  // The same for partners of at most `partner` area: the merged box's area is
+  // below (A_a + partner) / threshold.
+  Bounds reach(int a, double partner) const {
     const Bounds& x = items_[a].bounds;
     const Vec3 e = x.size();
-    const double most = std::min(2.0 * items_[a].area / options_.group_threshold, options_.max_share * scene_area_);
+    const double most = std::min((items_[a].area + partner) / options_.group_threshold, options_.max_share * scene_area_);
     Bounds r = x;
     for (int i = 0; i < 3; ++i) {
       const double ej = e[(i + 1) % 3], ek = e[(i + 2) % 3];
@@ -483,6 +578,43 @@ class Builder {
       r.lo[i] -= grow;
       r.hi[i] += grow;
     }
+    return r;
+  }
+
+  // Where the plain grid's items no larger than `a` must lie for a pair with
+  // it to pass, level by level: a level's cells hold boxes no larger than
+  // the cell, of at most 6 cell^2 area, so the fine levels' partners (a
+  // polygon near a large group) lie much closer than reach(a) (at the
+  // default threshold a cube's reach spans 10 times its side, a tiny
+  // partner's 4 times).
+  LooseGrid::Region smaller_reach(int a) const {
+    LooseGrid::Region r;
+    for (int level = 0; level <= LooseGrid::kLevels; ++level) {
+      const double cell = plain_->cell_size(level);
+      r.at[level] = level == LooseGrid::kLevels ? reach(a) : reach(a, std::min(items_[a].area, 6 * cell * cell));
+    }
+    return r;
+  }
+
+  // Where to look in the reach grid for items at least as large as `id`
+  // whose reach holds it: levels whose cells are smaller than such a reach
+  // hold none of them (near a large group, the reaches of thousands of small
+  // polygons). An item b of area A_b and sides e_1 >= e_2 >= e_3 grows its
+  // reach along e_1 to 2 along - e_1, where along = c e_1 + (c - 1) e_2 e_3 /
+  // (e_2 + e_3) with c = 2 / threshold, unless its pairs' area is capped at
+  // max_share of the scene. Over the boxes of area A_b that length is least
+  // for a cube, (3c - 2) sqrt(A_b / 6) (13 sides of the cube at the default
+  // threshold; a flat square's reach spans 9 of its sides, 6.4 sqrt(A_b)
+  // against the cube's 5.3); for c < 1 the item's own side, sqrt(A_b / 6),
+  // bounds it. A capped reach holds a box of the cap's area, so it is at
+  // least the root of a sixth of it.
+  LooseGrid::Region larger_reach(int id) const {
+    LooseGrid::Region r = LooseGrid::everywhere(items_[id].bounds);
+    const double c = 2.0 / options_.group_threshold;
+    const double side = std::min(std::max(3 * c - 2, 1.0) * std::sqrt(items_[id].area / 6),
+                                 std::sqrt(options_.max_share * scene_area_ / 6)) *
+                        (1 - 1e-9);
+    while (r.min_level < LooseGrid::kLevels && reach_->cell_size(r.min_level) < side) ++r.min_level;
     return r;
   }
 
@@ -512,22 +644,29 @@ class Builder {
   // Puts item i into the grids: its box, and its reach (where its smaller partners are).
   void index_item(int i) {
     if (all_pairs_) return;
-    plain_->insert(i, items_[i].bounds);
+    plain_->insert(i, items_[i].bounds, items_[i].area);
     if (items_[i].area > 0) reach_->insert(i, reach(i));
   }
+
+  // Whether item i is no longer alive: Item::alive, also kept as a bit (the
+  // queue's candidates name items at random, a bit per item stays in the
+  // caches where items of 100 bytes do not).
+  bool gone(int i) const { return (gone_[static_cast<size_t>(i) >> 6] >> (i & 63)) & 1; }
 
   // Whether an item is no longer alive (merged into a group), for the grids'
   // queries: a lambda, not a std::function, so that it is inlined.
   auto dead() const {
-    return [this](int i) { return !items_[i].alive; };
+    return [this](int i) { return gone(i); };
   }
 
   // Candidates of the new item `id` with every living item before it.
   void push_pairs(int id) {
     Candidate c;
+    std::vector<Candidate> run;
     if (all_pairs_) {
       for (int i = 0; i < id; ++i)
-        if (items_[i].alive && candidate(i, id, c)) queue_.push(c);
+        if (items_[i].alive && candidate(i, id, c)) run.push_back(c);
+      queue_.add(std::move(run));
       return;
     }
     seen_.resize(items_.size(), 0);
@@ -535,11 +674,12 @@ class Builder {
       if (i >= id || seen_[i]) return;
       seen_[i] = 1;
       touched_.push_back(i);
-      if (candidate(i, id, c)) queue_.push(c);
+      if (candidate(i, id, c)) run.push_back(c);
     };
-    plain_->query(reach(id), dead(), take);            // the smaller ones
-    reach_->query(items_[id].bounds, dead(), take);  // the larger ones
+    plain_->query(smaller_reach(id), dead(), take);  // the smaller ones
+    reach_->query(larger_reach(id), dead(), take);   // the larger ones
     forget_seen();
+    queue_.add(std::move(run));
   }
 
   // Living items, not members and not yet `seen_`, whose boxes may meet one of
@@ -686,6 +826,7 @@ class Builder {
     for (int m : members) {
       Item& it = items_[m];
       it.alive = false;
+      gone_[static_cast<size_t>(m) >> 6] |= uint64_t{1} << (m & 63);
       if (it.object < 0 && group.area < kAbsorbGrowth * it.area) {
         group.members.insert(group.members.end(), it.members.begin(), it.members.end());
         group.quotient = std::max(group.quotient, it.quotient);
@@ -694,6 +835,7 @@ class Builder {
       }
     }
     items_.push_back(std::move(group));
+    gone_.resize((items_.size() + 63) / 64, 0);
     return true;
   }
 
@@ -870,8 +1012,9 @@ class Builder {
   std::vector<Bounds> object_bounds_;
   mutable std::vector<std::unique_ptr<PatchTree>> object_trees_;  // per object, made when first asked (object_meets)
   std::vector<Item> items_;
+  std::vector<uint64_t> gone_;  // a bit per item: not alive (Item::alive)
   std::vector<int> shell_;  // objects of the scene's shell
-  std::priority_queue<Candidate> queue_;
+  CandidateQueue queue_;
   std::vector<uint8_t> member_;  // try_group's scratch: items in the box being formed (all 0 between calls)
   std::vector<uint8_t> seen_;    // form_group's scratch: items met in the current sweep (all 0 between calls)
   std::vector<int> touched_;     // the items seen_ marks
