@@ -295,7 +295,6 @@ class LooseGrid {
 struct Item {
   Bounds bounds;
   double area = 0;
-  bool alive = true;
   int object = -1;  // for an object item
   // For a group: its direct members (items), and the quotient that formed it.
   std::vector<int> members;
@@ -346,6 +345,7 @@ class Builder {
       }
       items_.push_back(std::move(item));
     }
+    gone_.assign((items_.size() + 63) / 64, 0);
     plain_ = std::make_unique<LooseGrid>(mesh.bounds);
     reach_ = std::make_unique<LooseGrid>(mesh.bounds);
   }
@@ -398,7 +398,6 @@ class Builder {
   void group(bool all_pairs) {
     all_pairs_ = all_pairs;
     const int n = static_cast<int>(items_.size());
-    gone_.assign((items_.size() + 63) / 64, 0);
     for (int i = 0; i < n; ++i) index_item(i);
     // Every pair once, on every thread; the queue orders candidates totally
     // (quotient, then indices), so the grouping does not depend on threads
@@ -442,7 +441,7 @@ class Builder {
     std::vector<int> top;
     root.objects = shell_;
     for (size_t i = 0; i < items_.size(); ++i)
-      if (items_[i].alive) top.push_back(static_cast<int>(i));
+      if (!gone(static_cast<int>(i))) top.push_back(static_cast<int>(i));
     place(h, 0, top, scene_area_);
     // Deeper than max_depth: dissolved into the ancestor at max_depth.
     return complete(std::move(h));
@@ -648,13 +647,13 @@ class Builder {
     if (items_[i].area > 0) reach_->insert(i, reach(i));
   }
 
-  // Whether item i is no longer alive: Item::alive, also kept as a bit (the
-  // queue's candidates name items at random, a bit per item stays in the
+  // Whether item i is no longer alive (merged into a group): a bit per item
+  // (the queue's candidates name items at random; the bits stay in the
   // caches where items of 100 bytes do not).
   bool gone(int i) const { return (gone_[static_cast<size_t>(i) >> 6] >> (i & 63)) & 1; }
 
-  // Whether an item is no longer alive (merged into a group), for the grids'
-  // queries: a lambda, not a std::function, so that it is inlined.
+  // gone() for the grids' queries: a lambda, not a std::function, so that
+  // it is inlined.
   auto dead() const {
     return [this](int i) { return gone(i); };
   }
@@ -665,7 +664,7 @@ class Builder {
     std::vector<Candidate> run;
     if (all_pairs_) {
       for (int i = 0; i < id; ++i)
-        if (items_[i].alive && candidate(i, id, c)) run.push_back(c);
+        if (!gone(i) && candidate(i, id, c)) run.push_back(c);
       queue_.add(std::move(run));
       return;
     }
@@ -700,7 +699,7 @@ class Builder {
     };
     if (all_pairs_) {
       for (int i = 0; i < static_cast<int>(items_.size()); ++i)
-        if (!seen_[i] && !member_[i] && items_[i].alive) mark(i);
+        if (!seen_[i] && !member_[i] && !gone(i)) mark(i);
       return;
     }
     const double margin = 2 * eps_;
@@ -825,7 +824,6 @@ class Builder {
     group.quotient = c.q;
     for (int m : members) {
       Item& it = items_[m];
-      it.alive = false;
       gone_[static_cast<size_t>(m) >> 6] |= uint64_t{1} << (m & 63);
       if (it.object < 0 && group.area < kAbsorbGrowth * it.area) {
         group.members.insert(group.members.end(), it.members.begin(), it.members.end());
@@ -1012,7 +1010,7 @@ class Builder {
   std::vector<Bounds> object_bounds_;
   mutable std::vector<std::unique_ptr<PatchTree>> object_trees_;  // per object, made when first asked (object_meets)
   std::vector<Item> items_;
-  std::vector<uint64_t> gone_;  // a bit per item: not alive (Item::alive)
+  std::vector<uint64_t> gone_;  // a bit per item: merged into a group (gone())
   std::vector<int> shell_;  // objects of the scene's shell
   CandidateQueue queue_;
   std::vector<uint8_t> member_;  // try_group's scratch: items in the box being formed (all 0 between calls)
