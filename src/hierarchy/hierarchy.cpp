@@ -584,8 +584,8 @@ class Builder {
   // it to pass, level by level: a level's cells hold boxes no larger than
   // the cell, of at most 6 cell^2 area, so the fine levels' partners (a
   // polygon near a large group) lie much closer than reach(a) (at the
-  // default threshold a cube's reach spans 10 times its side, a tiny
-  // partner's 4 times).
+  // default threshold a cube's reach spans 13 of its sides for a partner of
+  // its own area, 5.5 for a tiny one).
   LooseGrid::Region smaller_reach(int a) const {
     LooseGrid::Region r;
     for (int level = 0; level <= LooseGrid::kLevels; ++level) {
