@@ -402,13 +402,16 @@ class Builder {
     // Every pair once, on every thread; the queue orders candidates totally
     // (quotient, then indices), so the grouping does not depend on threads
     // (nor on the order in which the grid finds them).
-    tbb::enumerable_thread_specific<std::vector<Candidate>> found;
+    // Each thread's candidates in bands of quotient (CandidateQueue).
+    tbb::enumerable_thread_specific<std::vector<std::vector<Candidate>>> found(
+        std::vector<std::vector<Candidate>>(CandidateQueue::kBands));
     tbb::parallel_for(0, n, [&](int a) {
       auto& local = found.local();
       Candidate c;
+      auto keep = [&] { local[CandidateQueue::band(c.q, options_.group_threshold)].push_back(c); };
       if (all_pairs_) {
         for (int b = a + 1; b < n; ++b)
-          if (candidate(a, b, c)) local.push_back(c);
+          if (candidate(a, b, c)) keep();
         return;
       }
       // Each pair from the side of its larger item, whose reach holds the smaller.
@@ -417,19 +420,14 @@ class Builder {
         // (A tag above a's area is a larger item's, known without reading it.)
         if (b >= n || b == a || area > items_[a].area) return;
         if (items_[b].area > items_[a].area || (items_[b].area == items_[a].area && b < a)) return;
-        if (candidate(std::min(a, b), std::max(a, b), c)) local.push_back(c);
+        if (candidate(std::min(a, b), std::max(a, b), c)) keep();
       });
     });
-    // The first candidates: each thread's list sorted in place, a run of
-    // its own (not copied into one list: with an object per polygon, 48
-    // pairs a polygon, 850 MB at 1.1M polygons).
     queue_ = {};
-    for (auto& local : found) {
-      tbb::parallel_sort(local.begin(), local.end(), Candidate::best_first);
-      queue_.add_sorted(std::move(local));
-    }
-    for (Candidate c; queue_.take(c);)
-      if (!gone(c.a) && !gone(c.b)) try_group(c);
+    for (auto& local : found) queue_.add_bands(local);
+    const auto dead_pair = [this](const Candidate& c) { return gone(c.a) || gone(c.b); };
+    for (Candidate c; queue_.take(c, dead_pair);)
+      if (!dead_pair(c)) try_group(c);
   }
 
   Hierarchy finish() {
@@ -501,17 +499,38 @@ class Builder {
     static bool best_first(const Candidate& x, const Candidate& y) { return y < x; }
   };
 
-  // The candidates waiting, in runs sorted best first (the first
-  // candidates, a run per thread; those of each new group, a run of its
-  // own), and a heap of the runs' fronts: taking the best front each time
-  // gives the order of one queue of all of them (the order is total). One
-  // binary heap of every candidate, sifted at random through tens of
-  // megabytes, took a quarter of OFFICE's build when it held the first
-  // candidates too, and most of the time of the pairs new groups bring
-  // (5.2M of them, a few hundred a group, on OFFICE tiled 3x3 with an
-  // object per polygon); the heap of fronts holds a run's best alone.
+  // The candidates waiting, in runs sorted best first (each new group's
+  // pairs a run of its own), and a heap of the runs' fronts: taking the best
+  // front each time gives the order of one queue of all of them (the order
+  // is total). One binary heap of every candidate, sifted at random through
+  // tens of megabytes, took a quarter of OFFICE's build when it held the
+  // first candidates too, and most of the time of the pairs new groups
+  // bring (5.2M of them, a few hundred a group, on OFFICE tiled 3x3 with
+  // an object per polygon); the heap of fronts holds a run's best alone.
+  //
+  // The first candidates come in bands of quotient, the best band first,
+  // and a band is sorted only when its turn comes, after dropping its
+  // candidates whose items are gone by then (they would be skipped when
+  // taken; items never come back): with an object per polygon every try of
+  // OFFICE tiled 3x3 was a pair of quotient above 1, and the 17 million
+  // pairs below it were all gone when they were taken, sorted for nothing.
   class CandidateQueue {
    public:
+    static constexpr int kBands = 64;
+    // The band of quotient q (in (threshold, 2]: the merged box is no
+    // smaller than either item's), the best first: a lower band holds only
+    // higher quotients.
+    static int band(double q, double threshold) {
+      const double x = (2.0 - q) / std::max(2.0 - threshold, 1e-9) * kBands;
+      return static_cast<int>(std::clamp(x, 0.0, double(kBands - 1)));
+    }
+    // Adds a set of bands (kBands lists, each in any order), emptying them.
+    void add_bands(std::vector<std::vector<Candidate>>& bands) {
+      for (int k = 0; k < kBands; ++k) {
+        if (bands_.size() < static_cast<size_t>(kBands)) bands_.resize(kBands);
+        bands_[k].push_back(std::move(bands[k]));
+      }
+    }
     void add_sorted(std::vector<Candidate> run) {
       if (run.empty()) return;
       fronts_.push({run.front(), runs_.size(), 0});
@@ -522,20 +541,49 @@ class Builder {
       add_sorted(std::move(run));
     }
     // The best candidate left, taken out; false when none is left.
-    bool take(Candidate& c) {
+    // `dead(c)`: whether c's items are gone (a band's are dropped then).
+    template <typename Dead>
+    bool take(Candidate& c, const Dead& dead) {
+      if (!band_open_) next_band(dead);
       if (fronts_.empty()) return false;
       const Front f = fronts_.top();
       fronts_.pop();
       c = f.c;
       std::vector<Candidate>& run = runs_[f.run];
-      if (f.next + 1 < run.size())
+      if (f.next + 1 < run.size()) {
         fronts_.push({run[f.next + 1], f.run, f.next + 1});
-      else
+      } else {
         std::vector<Candidate>().swap(run);  // its memory back
+        if (f.run == band_run_) next_band(dead);
+      }
       return true;
     }
 
    private:
+    // The next band with a living candidate, sorted, as a run.
+    template <typename Dead>
+    void next_band(const Dead& dead) {
+      band_open_ = true;
+      band_run_ = SIZE_MAX;
+      for (; next_band_ < bands_.size(); ++next_band_) {
+        std::vector<Candidate> run;
+        for (std::vector<Candidate>& part : bands_[next_band_]) {
+          for (const Candidate& c : part)
+            if (!dead(c)) run.push_back(c);
+          std::vector<Candidate>().swap(part);
+        }
+        if (run.empty()) continue;
+        tbb::parallel_sort(run.begin(), run.end(), Candidate::best_first);
+        band_run_ = runs_.size();
+        add_sorted(std::move(run));
+        ++next_band_;
+        return;
+      }
+    }
+    std::vector<std::vector<std::vector<Candidate>>> bands_;  // [band][part]
+    size_t next_band_ = 0, band_run_ = SIZE_MAX;
+    bool band_open_ = false;
+
     struct Front {
       Candidate c;
       size_t run, next;
