@@ -526,10 +526,8 @@ class Builder {
     }
     // Adds a set of bands (kBands lists, each in any order), emptying them.
     void add_bands(std::vector<std::vector<Candidate>>& bands) {
-      for (int k = 0; k < kBands; ++k) {
-        if (bands_.size() < static_cast<size_t>(kBands)) bands_.resize(kBands);
-        bands_[k].push_back(std::move(bands[k]));
-      }
+      bands_.resize(kBands);
+      for (int k = 0; k < kBands; ++k) bands_[k].push_back(std::move(bands[k]));
     }
     void add_sorted(std::vector<Candidate> run) {
       if (run.empty()) return;
