@@ -403,8 +403,8 @@ class Builder {
     // (quotient, then indices), so the grouping does not depend on threads
     // (nor on the order in which the grid finds them).
     // Each thread's candidates in bands of quotient (CandidateQueue).
-    tbb::enumerable_thread_specific<std::vector<std::vector<Candidate>>> found(
-        std::vector<std::vector<Candidate>>(CandidateQueue::kBands));
+    const std::vector<std::vector<Candidate>> no_bands(CandidateQueue::kBands);
+    tbb::enumerable_thread_specific<std::vector<std::vector<Candidate>>> found(no_bands);
     tbb::parallel_for(0, n, [&](int a) {
       auto& local = found.local();
       Candidate c;
