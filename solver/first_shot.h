@@ -55,11 +55,13 @@ inline uint32_t code_limit(size_t faces) { return met_code(static_cast<int>(face
 // One local line from `face`: the point of its patch that u[0], u[1] give,
 // the cosine-distributed direction of u[2], u[3] (all in [0, 1)); returns
 // what it meets first (`nearest(patch, org, dir)`).
+// `sampler`: the face's patch and normal (PatchSampler), made once for its lines.
 template <typename Nearest>
-uint32_t local_line_outcome(const PatchMesh& mesh, int face, const double u[4], const Nearest& nearest) {
+uint32_t local_line_outcome(const PatchMesh& mesh, int face, const PatchSampler& sampler, const double u[4],
+                            const Nearest& nearest) {
   const int patch = mesh.face_patch[face];
-  const Vec3 n = mesh.face_normal(face);
-  const Vec3 org = uniform_point(mesh, mesh.patches[patch], u[0], u[1]);
+  const Vec3& n = sampler.normal();
+  const Vec3 org = sampler.point(u[0], u[1]);
   if (mesh.may_touch(patch)) {
     // Where the face touches another, a line along the normal meets it at
     // distance 0, whatever the direction the cosine draws next (grazing
@@ -67,10 +69,16 @@ uint32_t local_line_outcome(const PatchMesh& mesh, int face, const double u[4], 
     const NearestHit probe = nearest(patch, org, n);
     if (probe.patch >= 0 && mesh.touching(patch, probe.patch)) return met_code(mesh.face_met(probe.patch, n), true);
   }
-  const Vec3 dir = cosine_direction(n, u[2], u[3]);
+  const Vec3 dir = sampler.direction(u[2], u[3]);
   const NearestHit hit = nearest(patch, org, dir);
   if (hit.patch < 0) return kEscaped;
   return met_code(mesh.face_met(hit.patch, dir), mesh.touching(patch, hit.patch));
+}
+
+template <typename Nearest>
+uint32_t local_line_outcome(const PatchMesh& mesh, int face, const double u[4], const Nearest& nearest) {
+  const PatchSampler sampler(mesh, mesh.patches[mesh.face_patch[face]], mesh.face_normal(face));
+  return local_line_outcome(mesh, face, sampler, u, nearest);
 }
 
 // The same with four independent numbers of `rng`.
@@ -173,16 +181,21 @@ void trace_first_shot_block(const PatchMesh& mesh, const FirstShotPlan& plan, un
   const uint64_t lo = block * kFirstShotBlock, hi = std::min(plan.lines(), lo + kFirstShotBlock);
   size_t e = std::upper_bound(plan.first.begin(), plan.first.end(), lo) - plan.first.begin() - 1;
   std::optional<EmitterPoints> points;
+  std::optional<PatchSampler> sampler;
   for (uint64_t l = lo; l < hi; ++l) {
     while (l >= plan.first[e + 1]) ++e;
+    const int face = plan.emitters[e];
     if (!plan.halton) {
-      line(e, local_line_outcome(mesh, plan.emitters[e], rng, nearest));
+      line(e, local_line_outcome(mesh, face, rng, nearest));
       continue;
     }
-    if (!points || points->emitter() != e) points.emplace(seed, e);
+    if (!points || points->emitter() != e) {
+      points.emplace(seed, e);
+      sampler.emplace(mesh, mesh.patches[mesh.face_patch[face]], mesh.face_normal(face));
+    }
     double u[4];
     points->point(l - plan.first[e], u);
-    line(e, local_line_outcome(mesh, plan.emitters[e], u, nearest));
+    line(e, local_line_outcome(mesh, face, *sampler, u, nearest));
   }
 }
 

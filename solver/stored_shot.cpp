@@ -17,6 +17,7 @@
 #include "error.h"
 #include "hierarchical.h"
 #include "progress.h"
+#include "radix_sort.h"
 #include "second_shot.h"
 #include "varint.h"
 #include "zstd_frame.h"
@@ -117,10 +118,10 @@ void write_frame(std::ostream& out, const std::string& raw, int level) {
 template <typename TraceBlock>
 std::string encode_frame(uint64_t blocks, uint64_t first_block, uint64_t blocks_a_frame, const TraceBlock& trace_block) {
   std::string raw;
-  std::vector<uint32_t> codes;
+  std::vector<uint32_t> codes, scratch;
   size_t run_emitter = 0;
   const auto flush = [&] {
-    std::sort(codes.begin(), codes.end());
+    sort_u32(codes, scratch);  // (std::sort was 3 % of office2's preprocess)
     uint32_t previous = 0;
     for (size_t i = 0; i < codes.size();) {
       size_t j = i;

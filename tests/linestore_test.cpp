@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <fstream>
 #include <numeric>
 #include <random>
@@ -11,6 +12,7 @@
 
 #include <cstring>
 #include "manifest.h"
+#include "radix_sort.h"
 #include "test_util.h"
 #include "varint.h"
 #include "zstd_frame.h"
@@ -421,6 +423,25 @@ TEST(Manifest, RoundTripsAndNamesTheFirstMismatch) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("run mpath-preprocess"), std::string::npos);
+  }
+}
+
+// The stored shots' sort of codes: std::sort's order for lists short and
+// long, of values spread over every byte, sharing their high bytes, or all
+// equal, with the scratch buffer reused from list to list.
+TEST(LineStore, RadixSortOfCodesIsStdSortsOrder) {
+  std::mt19937 gen(7);
+  std::vector<uint32_t> values, scratch;
+  for (int trial = 0; trial < 300; ++trial) {
+    const size_t n = trial % 5 == 0 ? gen() % 64 : gen() % 5000;
+    const uint32_t mask = std::array<uint32_t, 5>{0xffffffffu, 0xffffu, 0xff00ffu, 0x7u, 0u}[trial % 5];
+    const uint32_t base = trial % 2 == 0 ? 0u : 0xabcd0000u;
+    values.resize(n);
+    for (uint32_t& v : values) v = base | (static_cast<uint32_t>(gen()) & mask);
+    std::vector<uint32_t> expected = values;
+    std::sort(expected.begin(), expected.end());
+    sort_u32(values, scratch);
+    ASSERT_EQ(values, expected) << trial;
   }
 }
 

@@ -86,5 +86,65 @@ TEST(Sampling, GlobalLinesCrossAFaceWithProbabilityTwoAOverS) {
   EXPECT_LT(var, 0.5 * sigma * sigma);
 }
 
+// A patch's sampler gives exactly the points and directions of
+// uniform_point and cosine_direction, on triangles and on quads split
+// unevenly, and a global line's direction is cosine_direction's about its
+// face's inward normal.
+TEST(Sampling, PatchSamplerGivesTheSamePointsAndDirections) {
+  Rng rng = make_rng(11, 0, 0);
+  Scene scene;
+  const int m = test::add_material(scene, "m", 0.5, 0.0);
+  const int o = test::add_object(scene, "o");
+  for (int i = 0; i < 20; ++i) {
+    const Vec3 c{uniform(rng), uniform(rng), uniform(rng)};
+    const Vec3 u = normalize(Vec3{uniform(rng) - 0.5, uniform(rng) - 0.5, uniform(rng) - 0.5});
+    const Vec3 v = normalize(cross(u, Vec3{0.3, 0.9, -0.2}));
+    const double a = 0.1 + uniform(rng), b = 0.1 + uniform(rng), shrink = 0.2 + 0.8 * uniform(rng);
+    if (i % 3 == 0)
+      scene.polygons.push_back(Polygon{{c, c + u * a, c + v * b}, m, o});
+    else  // a trapezoid: its two triangles of different areas
+      test::add_quad(scene, c, c + u * a, c + u * (a * shrink) + v * b, c + v * b, m, o);
+  }
+  const PatchMesh mesh = build_mesh(scene, 1e9);
+  bool triangles = false, quads = false;
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const int face = static_cast<int>(f);
+    const Patch& patch = mesh.patches[mesh.face_patch[face]];
+    (patch.is_triangle() ? triangles : quads) = true;
+    const PatchSampler sampler(mesh, patch, mesh.face_normal(face));
+    for (int k = 0; k < 200; ++k) {
+      const double r[4] = {uniform(rng), uniform(rng), uniform(rng), uniform(rng)};
+      const Vec3 p = sampler.point(r[0], r[1]), q = uniform_point(mesh, patch, r[0], r[1]);
+      ASSERT_TRUE(p.x == q.x && p.y == q.y && p.z == q.z) << f << " " << k;
+      const Vec3 d = sampler.direction(r[2], r[3]), e = cosine_direction(mesh.face_normal(face), r[2], r[3]);
+      ASSERT_TRUE(d.x == e.x && d.y == e.y && d.z == e.z) << f << " " << k;
+    }
+  }
+  EXPECT_TRUE(triangles && quads);
+
+  Bounds box;
+  box.extend({-1, 0, 2});
+  box.extend({3, 0.5, 4});
+  const BoxLineSampler lines(box);
+  for (int k = 0; k < 2000; ++k) {
+    const double r[4] = {uniform(rng), uniform(rng), uniform(rng), uniform(rng)};
+    const GlobalLine line = lines.sample(r);
+    int axis = -1;  // the face the line starts on: it stands a hair outside the box there
+    double outside = 0;
+    for (int i = 0; i < 3; ++i) {
+      const double d = std::max(box.lo[i] - line.org[i], line.org[i] - box.hi[i]);
+      if (d > outside) {
+        outside = d;
+        axis = i;
+      }
+    }
+    ASSERT_GE(axis, 0);
+    Vec3 inward;
+    inward[axis] = line.dir[axis] > 0 ? 1.0 : -1.0;
+    const Vec3 e = cosine_direction(inward, r[2], r[3]);
+    ASSERT_TRUE(line.dir.x == e.x && line.dir.y == e.y && line.dir.z == e.z) << k;
+  }
+}
+
 }  // namespace
 }  // namespace mpath

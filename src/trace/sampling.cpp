@@ -19,9 +19,13 @@ Vec3 cosine_direction(const Vec3& n, Rng& rng) {
 }
 
 Vec3 cosine_direction(const Vec3& n, double u1, double u2) {
-  const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
   Vec3 t, b;
   orthonormal_basis(n, t, b);
+  return cosine_direction(t, b, n, u1, u2);
+}
+
+Vec3 cosine_direction(const Vec3& t, const Vec3& b, const Vec3& n, double u1, double u2) {
+  const double r = std::sqrt(u1), phi = 2.0 * std::numbers::pi * u2;
   return t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0, 1.0 - u1));
 }
 
@@ -38,6 +42,19 @@ Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, Rng& rng) {
   const double u = uniform(rng), v = uniform(rng);
   return triangle_point(a, b, c, u, v);
 }
+
+// The share of quad v0 v1 v2 v3's area in its first triangle (v0, v1, v3).
+double quad_split(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Vec3& v3) {
+  const double a1 = 0.5 * length(cross(v1 - v0, v3 - v0));
+  const double a2 = 0.5 * length(cross(v3 - v2, v1 - v2));
+  return a1 / (a1 + a2);
+}
+
+// The point of quad v0 v1 v2 v3 that u1, u2 give, `c` its quad_split.
+Vec3 quad_point(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Vec3& v3, double c, double u1, double u2) {
+  if (u1 < c) return triangle_point(v0, v1, v3, u1 / c, u2);
+  return triangle_point(v2, v3, v1, std::min((u1 - c) / (1 - c), std::nextafter(1.0, 0.0)), u2);
+}
 }  // namespace
 
 Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, double u1, double u2) {
@@ -46,11 +63,19 @@ Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, double u1, double u2) 
   const Vec3& v2 = mesh.vertices[p.v[2]];
   if (p.is_triangle()) return triangle_point(v0, v1, v2, u1, u2);
   const Vec3& v3 = mesh.vertices[p.v[3]];
-  const double a1 = 0.5 * length(cross(v1 - v0, v3 - v0));
-  const double a2 = 0.5 * length(cross(v3 - v2, v1 - v2));
-  const double c = a1 / (a1 + a2);
-  if (u1 < c) return triangle_point(v0, v1, v3, u1 / c, u2);
-  return triangle_point(v2, v3, v1, std::min((u1 - c) / (1 - c), std::nextafter(1.0, 0.0)), u2);
+  return quad_point(v0, v1, v2, v3, quad_split(v0, v1, v2, v3), u1, u2);
+}
+
+PatchSampler::PatchSampler(const PatchMesh& mesh, const Patch& patch, const Vec3& normal)
+    : triangle_(patch.is_triangle()), n_(normal) {
+  for (int k = 0; k < 4; ++k) v_[k] = mesh.vertices[patch.v[k]];
+  if (!triangle_) split_ = quad_split(v_[0], v_[1], v_[2], v_[3]);
+  orthonormal_basis(n_, t_, b_);
+}
+
+Vec3 PatchSampler::point(double u1, double u2) const {
+  if (triangle_) return triangle_point(v_[0], v_[1], v_[2], u1, u2);
+  return quad_point(v_[0], v_[1], v_[2], v_[3], split_, u1, u2);
 }
 
 Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, Rng& rng) {
@@ -136,10 +161,13 @@ void LineSequence::point(uint64_t index, Rng& rng, double u[4]) const {
 }
 
 void shifted_halton(uint64_t index, const double shift[4], double u[4]) {
-  static constexpr unsigned kBases[4] = {2, 3, 5, 7};
+  // The bases' functions called by name, not through radical_inverse's
+  // switch: inlined, where the loop over the bases was a call each.
+  const double x[4] = {radical_inverse_2(index), radical_inverse_in<3, 7>(index), radical_inverse_in<5, 5>(index),
+                       radical_inverse_in<7, 4>(index)};
   for (int k = 0; k < 4; ++k) {
-    const double x = radical_inverse(index, kBases[k]) + shift[k];
-    u[k] = x >= 1.0 ? x - 1.0 : x;
+    const double y = x[k] + shift[k];
+    u[k] = y >= 1.0 ? y - 1.0 : y;
   }
 }
 
@@ -152,6 +180,11 @@ BoxLineSampler::BoxLineSampler(const Bounds& box) : box_(box) {
     face_cdf_[f] = sum;
   }
   for (double& c : face_cdf_) c /= sum;
+  for (int f = 0; f < 6; ++f) {
+    Vec3 inward;
+    inward[f / 2] = f % 2 == 1 ? -1.0 : 1.0;
+    orthonormal_basis(inward, tangent_[f], bitangent_[f]);
+  }
   hair_ = 1e-6 * box.diagonal();
 }
 
@@ -174,7 +207,7 @@ GlobalLine BoxLineSampler::sample(const double r[4]) const {
   p[v] = box_.lo[v] + r[1] * (box_.hi[v] - box_.lo[v]);
   Vec3 inward;
   inward[axis] = high ? -1.0 : 1.0;
-  const Vec3 dir = cosine_direction(inward, r[2], r[3]);
+  const Vec3 dir = cosine_direction(tangent_[face], bitangent_[face], inward, r[2], r[3]);
   // Distance to the far wall (slab exit).
   double exit = INFINITY;
   for (int i = 0; i < 3; ++i) {

@@ -20,6 +20,8 @@ inline double uniform(Rng& rng) { return static_cast<double>(rng()) * 0x1p-32; }
 // Cosine-distributed direction about unit normal n.
 Vec3 cosine_direction(const Vec3& n, Rng& rng);
 Vec3 cosine_direction(const Vec3& n, double u1, double u2);
+// The same about n with its orthonormal_basis t, b found beforehand.
+Vec3 cosine_direction(const Vec3& t, const Vec3& b, const Vec3& n, double u1, double u2);
 
 // Uniform point on a patch (a quad is split as Embree splits it).
 Vec3 uniform_point(const PatchMesh& mesh, const Patch& patch, Rng& rng);
@@ -27,6 +29,24 @@ Vec3 uniform_point(const PatchMesh& mesh, const Patch& patch, Rng& rng);
 // area and is stretched back to [0, 1), so stratified numbers give
 // stratified points.
 Vec3 uniform_point(const PatchMesh& mesh, const Patch& patch, double u1, double u2);
+
+// uniform_point(mesh, patch, u1, u2) and cosine_direction(normal, u3, u4)
+// for the many lines of one patch, with what depends on the patch alone (the
+// split of a quad into its triangles, the basis about the normal) computed
+// once: the same points and directions.
+class PatchSampler {
+ public:
+  PatchSampler(const PatchMesh& mesh, const Patch& patch, const Vec3& normal);
+  Vec3 point(double u1, double u2) const;
+  Vec3 direction(double u1, double u2) const { return cosine_direction(t_, b_, n_, u1, u2); }
+  const Vec3& normal() const { return n_; }
+
+ private:
+  Vec3 v_[4];
+  bool triangle_;
+  double split_ = 1;  // the share of a quad's area in its first triangle
+  Vec3 n_, t_, b_;
+};
 
 // A segment of a uniformly distributed line through a box: starts a hair
 // outside the box and ends a hair past the far side.
@@ -49,6 +69,7 @@ class BoxLineSampler {
  private:
   Bounds box_;
   double face_cdf_[6];
+  Vec3 tangent_[6], bitangent_[6];  // the orthonormal_basis of each face's inward normal
   double hair_;
 };
 
