@@ -307,11 +307,13 @@ void BoxFileReader::read_chunk(size_t index, DecodedChunk& out) {
     fail(fmt::format("chunk {}: corrupted (records do not decode)", index));
 }
 
-void BoxFileReader::read_chunk_lines(size_t index, const uint32_t* order, size_t take, DecodedChunk& out) {
+void BoxFileReader::read_chunk_lines(size_t index, const uint32_t* order, size_t take, DecodedChunk& out,
+                                     const EventSides* sides) {
   const ChunkInfo& c = chunks_.at(index);
   read_frame(c.offset, c.bytes, c.raw_bytes, fmt::format("chunk {}", index), raw_);
-  if (!decode_chunk_lines(reinterpret_cast<const unsigned char*>(raw_.data()), raw_.size(), c.lines, c.events, order,
-                          take, place_, out))
+  const auto* data = reinterpret_cast<const unsigned char*>(raw_.data());
+  if (!(sides ? decode_chunk_lines(data, raw_.size(), c.lines, c.events, order, take, *sides, place_, out)
+              : decode_chunk_lines(data, raw_.size(), c.lines, c.events, order, take, place_, out)))
     fail(fmt::format("chunk {}: corrupted (records do not decode)", index));
 }
 

@@ -104,7 +104,9 @@ class BoxFileReader {
   uint64_t events() const;
   void read_chunk(size_t index, DecodedChunk& out);
   // Lines order[0 .. take) of a chunk, in that order (decode_chunk_lines).
-  void read_chunk_lines(size_t index, const uint32_t* order, size_t take, DecodedChunk& out);
+  // With `sides`, each kept event's sides written from it (EventSides).
+  void read_chunk_lines(size_t index, const uint32_t* order, size_t take, DecodedChunk& out,
+                        const EventSides* sides = nullptr);
 
  private:
   [[noreturn]] void fail(const std::string& what) const;

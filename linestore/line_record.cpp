@@ -1,5 +1,7 @@
 #include "line_record.h"
 
+#include <cstring>
+
 #include "varint.h"
 #include "zstd_frame.h"
 
@@ -78,6 +80,7 @@ void DecodedChunk::clear() {
   entry_ar.clear();
   exit_ar.clear();
   events.clear();
+  foreign_events = false;
 }
 
 void gather_lines(const DecodedChunk& from, const uint32_t* order, size_t n, DecodedChunk& out) {
@@ -188,9 +191,9 @@ bool walk_lines(const unsigned char* data, const Streams& s, uint64_t lines, uin
 
 // The second walk, over both streams: line i's events are decoded and
 // checked, and written from out.events[at(i)] on (at(i) = kDropped: not kept).
-template <typename At>
+template <typename At, typename Kept>
 bool walk_events(const unsigned char* data, size_t size, const Streams& s, uint64_t lines, const At& at,
-                 DecodedChunk& out) {
+                 const Kept& kept, DecodedChunk& out) {
   size_t lp = s.line_start, ep = s.line_end;
   uint64_t previous_first = 0;
   for (uint64_t i = 0; i < lines; ++i) {
@@ -221,11 +224,16 @@ bool walk_events(const unsigned char* data, size_t size, const Streams& s, uint6
       e.along = code & 1;
       if (e.kind == Event::child_box && (!get_ar(data, size, ep, e.entry_ar) || !get_ar(data, size, ep, e.exit_ar)))
         return false;
-      if (to) *to++ = e;
+      if (to) {
+        kept(e);
+        *to++ = e;
+      }
     }
   }
   return ep == size;
 }
+
+const auto kAsDecoded = [](Event&) {};
 
 }  // namespace
 
@@ -234,11 +242,15 @@ bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, uint64
   if (lines > size || !open_streams(data, size, events, s)) return false;  // a line is a byte or more
   const auto same = [](uint64_t i) { return static_cast<uint32_t>(i); };
   return walk_lines(data, s, lines, events, lines, same, out) &&
-         walk_events(data, size, s, lines, [&](uint64_t i) { return out.first[i]; }, out);
+         walk_events(data, size, s, lines, [&](uint64_t i) { return out.first[i]; }, kAsDecoded, out);
 }
 
-bool decode_chunk_lines(const unsigned char* data, size_t size, uint64_t lines, uint64_t events,
-                        const uint32_t* order, size_t take, std::vector<uint32_t>& place, DecodedChunk& out) {
+namespace {
+
+template <typename Kept>
+bool decode_lines_in_order(const unsigned char* data, size_t size, uint64_t lines, uint64_t events,
+                           const uint32_t* order, size_t take, const Kept& kept, std::vector<uint32_t>& place,
+                           DecodedChunk& out) {
   Streams s;
   if (lines > size || take > lines || !open_streams(data, size, events, s)) return false;
   place.assign(lines, kDropped);
@@ -250,7 +262,38 @@ bool decode_chunk_lines(const unsigned char* data, size_t size, uint64_t lines, 
   // Each kept line's place becomes where its events go, so that the second
   // walk reads it in line order instead of looking it up at random.
   for (size_t k = 0; k < take; ++k) place[order[k]] = out.first[k];
-  return walk_events(data, size, s, lines, [&](uint64_t i) { return place[i]; }, out);
+  return walk_events(data, size, s, lines, [&](uint64_t i) { return place[i]; }, kept, out);
+}
+
+}  // namespace
+
+bool decode_chunk_lines(const unsigned char* data, size_t size, uint64_t lines, uint64_t events,
+                        const uint32_t* order, size_t take, std::vector<uint32_t>& place, DecodedChunk& out) {
+  out.foreign_events = false;
+  return decode_lines_in_order(data, size, lines, events, order, take, kAsDecoded, place, out);
+}
+
+bool decode_chunk_lines(const unsigned char* data, size_t size, uint64_t lines, uint64_t events,
+                        const uint32_t* order, size_t take, const EventSides& sides, std::vector<uint32_t>& place,
+                        DecodedChunk& out) {
+  out.foreign_events = false;
+  const auto* base = static_cast<const unsigned char*>(sides.base);
+  bool foreign = false;
+  const bool ok = decode_lines_in_order(
+      data, size, lines, events, order, take,
+      [&](Event& e) {
+        if (e.kind != Event::patch || e.id >= sides.count) {
+          foreign = true;
+          return;
+        }
+        int f[2];
+        std::memcpy(f, base + e.id * sides.stride, sizeof f);
+        e.entry_ar = static_cast<uint32_t>(e.along ? f[0] : f[1]);
+        e.exit_ar = static_cast<uint32_t>(e.along ? f[1] : f[0]);
+      },
+      place, out);
+  out.foreign_events = foreign;
+  return ok;
 }
 
 }  // namespace mpath::linestore

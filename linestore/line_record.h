@@ -78,6 +78,9 @@ struct DecodedChunk {
   std::vector<uint32_t> first;  // size lines + 1
   std::vector<uint32_t> entry_ar, exit_ar;
   std::vector<Event> events;
+  // Decoded with EventSides: some kept event is not a patch of the table's
+  // (its sides are left unset).
+  bool foreign_events = false;
 
   size_t lines() const { return first.empty() ? 0 : first.size() - 1; }
   void clear();
@@ -99,5 +102,22 @@ bool decode_chunk(const unsigned char* data, size_t size, uint64_t lines, uint64
 // scratch. False also when `order` names a line twice or none of the chunk's.
 bool decode_chunk_lines(const unsigned char* data, size_t size, uint64_t lines, uint64_t events,
                         const uint32_t* order, size_t take, std::vector<uint32_t>& place, DecodedChunk& out);
+
+// A table of the sides of a box's patches for decode_chunk_lines to write
+// into each kept event as it decodes it, where a pass would otherwise go
+// over the decoded events again to look them up: record k of `count`, each
+// `stride` bytes from `base` on, starts with patch k's two sides {front,
+// back} as ints. A patch event's entry_ar then holds the side it turns
+// forward along the line (front where `along`), its exit_ar the other; an
+// event of a child box, or of a patch past the table, sets
+// DecodedChunk::foreign_events.
+struct EventSides {
+  const void* base = nullptr;
+  size_t stride = 0;
+  size_t count = 0;
+};
+bool decode_chunk_lines(const unsigned char* data, size_t size, uint64_t lines, uint64_t events,
+                        const uint32_t* order, size_t take, const EventSides& sides, std::vector<uint32_t>& place,
+                        DecodedChunk& out);
 
 }  // namespace mpath::linestore

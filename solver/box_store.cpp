@@ -451,10 +451,10 @@ void BoxStore::read(int box, uint64_t chunk, linestore::DecodedChunk& out) const
   reader(box, chunk, local).read_chunk(local, out);
 }
 
-void BoxStore::read_lines(int box, uint64_t chunk, const uint32_t* order, size_t take,
-                          linestore::DecodedChunk& out) const {
+void BoxStore::read_lines(int box, uint64_t chunk, const uint32_t* order, size_t take, linestore::DecodedChunk& out,
+                          const linestore::EventSides* sides) const {
   uint32_t local;
-  reader(box, chunk, local).read_chunk_lines(local, order, take, out);
+  reader(box, chunk, local).read_chunk_lines(local, order, take, out, sides);
 }
 
 }  // namespace mpath

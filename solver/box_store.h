@@ -127,7 +127,9 @@ class BoxStore {
   void read(int box, uint64_t chunk, linestore::DecodedChunk& out) const;
   // Lines order[0 .. take) of the chunk, in that order (a pass's, decoded
   // straight into its order: linestore::decode_chunk_lines).
-  void read_lines(int box, uint64_t chunk, const uint32_t* order, size_t take, linestore::DecodedChunk& out) const;
+  // With `sides`, each kept event's sides written from it (linestore::EventSides).
+  void read_lines(int box, uint64_t chunk, const uint32_t* order, size_t take, linestore::DecodedChunk& out,
+                  const linestore::EventSides* sides = nullptr) const;
   uint64_t chunk_lines(int box, uint64_t chunk) const { return boxes_[box].chunk_lines[chunk]; }
 
  private:

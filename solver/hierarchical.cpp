@@ -336,7 +336,7 @@ BoxResult box_pass(const BoxStore& store, int b, RadiosityState& state, int shar
     const double allowance =
         every_line || pass_lines == 0 ? 1.0 : double(part_lines(in.parts, lo, hi)) / double(pass_lines);
     stream_pass_lines(
-        store, b, in.parts, lo, hi, pass, progress,
+        store, b, in.parts, lo, hi, pass, progress, nullptr,
         [&](const linestore::DecodedChunk& chunk, uint64_t c) {
           if (!chunk_fits(in, chunk))
             throw InputError(fmt::format("store: box {} chunk {} names patches, boxes or ARs the box does not have "

@@ -144,9 +144,12 @@ inline constexpr size_t kLinesAhead = 4;
 // for the lines d = 1 .. kLinesAhead places after it. (Taking the chunk's
 // first lines instead, and decoding only them, raised the furnace error at
 // rho 0.99 by a fifth: every thin pass then met the same lines.)
+// `sides`: the box's patch sides for the decoder to write into the events
+// (linestore::EventSides), or none.
 template <typename Check, typename Line, typename Ahead>
 void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart>& parts, uint64_t lo, uint64_t hi,
-                       unsigned pass, Progress& progress, const Check& check, const Line& line, const Ahead& ahead) {
+                       unsigned pass, Progress& progress, const linestore::EventSides* sides, const Check& check,
+                       const Line& line, const Ahead& ahead) {
   // The lines and order per thread, kept from pass to pass: their buffers
   // are megabytes, and allocating them afresh for every box of every pass
   // cost page faults.
@@ -157,7 +160,7 @@ void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart
     const size_t n = store.chunk_lines(b, c);
     const size_t take = std::min<size_t>(n, parts[i].lines);
     chunk_line_order(pass, b, c, n, order);
-    store.read_lines(b, c, order.data(), take, lines);
+    store.read_lines(b, c, order.data(), take, lines, sides);
     check(lines, c);
     for (size_t k = 0; k < take; ++k) {
       for (size_t d = kLinesAhead; d >= 1; --d)

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <mutex>
 
 #include "error.h"
@@ -29,26 +30,28 @@ inline int pair_class(const LineSets& sets, const LineSetBox& lines, bool root, 
 }
 
 
-// Checks a decoded chunk's events (patches of the box only; throws naming
-// the chunk otherwise) and gives each its faces for a line-set pass: once a
-// chunk is decoded, each patch event's AR fields (which only child-box
-// events use) take the faces it turns towards along the line and against
-// it (face_towards), looked up for the whole chunk at once (loads
-// independent of one another), so that a line's transport and its
-// prefetches start from the faces instead of waiting for each patch's
-// record first. The chunk is the thread's own decoded copy.
-void chunk_faces(const StoreBox& box, linestore::DecodedChunk& chunk, int x, uint64_t c) {
-  for (Event& e : chunk.events) {
-    if (e.kind != Event::patch || e.id >= box.local_faces.size())
-      throw InputError(fmt::format("store: box {} chunk {} names patches the box does not have (damaged or "
-                                   "foreign store); run mpath-preprocess again", x, c));
-    const auto& f = box.local_faces[e.id];
-    e.entry_ar = static_cast<uint32_t>(e.along ? f[0] : f[1]);
-    e.exit_ar = static_cast<uint32_t>(e.along ? f[1] : f[0]);
-  }
+// A line-set pass's events name only patches of the box, and each patch
+// event's AR fields (which only child-box events use) hold the faces it
+// turns towards along the line and against it (face_towards), written by
+// the decoder from the box's table (linestore::EventSides) as it decodes
+// the chunk (a second walk over the decoded events to look them up was a
+// few per cent of a pass where the records fit the caches), so that a
+// line's transport and its prefetches start from the faces instead of
+// waiting for each patch's record first. The chunk is the thread's own
+// decoded copy.
+linestore::EventSides event_sides(const StoreBox& box) {
+  static_assert(offsetof(LocalPatch, faces) == 0 && sizeof(LocalPatch::faces) == 2 * sizeof(int));
+  return {box.local_faces.data(), sizeof(LocalPatch), box.local_faces.size()};
 }
 
-// face_towards(box, e, dir) of an event chunk_faces went over.
+// Throws naming the chunk where it names anything but the box's patches.
+void check_chunk_faces(const linestore::DecodedChunk& chunk, int x, uint64_t c) {
+  if (chunk.foreign_events)
+    throw InputError(fmt::format("store: box {} chunk {} names patches the box does not have (damaged or "
+                                 "foreign store); run mpath-preprocess again", x, c));
+}
+
+// face_towards(box, e, dir) of an event decoded with event_sides.
 inline int towards(const Event& e, int dir) { return static_cast<int>(dir > 0 ? e.entry_ar : e.exit_ar); }
 
 // Per slot: what the lines of the slot's own box do at the face, and the
@@ -315,7 +318,7 @@ struct PassContext {
 // Brings into the caches what transport_set_line will touch for a line
 // `distance` lines ahead, in stages that each read what an earlier one
 // brought: the faces' records and the patches' (4 lines ahead; the faces
-// come with the events, chunk_faces), their first entries' records (2).
+// come with the events, event_sides), their first entries' records (2).
 // (Measured on OFFICE before the faces came with the events, when a line's
 // patches were brought 4 lines ahead, their faces 2 and the entries 1:
 // 3/2/1 and 6/3/1 were no faster.)
@@ -504,12 +507,13 @@ SetResult set_pass(const BoxStore& store, const LineSets& sets, int x, Radiosity
   const uint64_t pass_lines = part_lines(parts, 0, chunks);
   const int shards = pass_shards(shards_wanted, chunks);
   const size_t later_faces = waits ? faces : 0;
+  const linestore::EventSides sides = event_sides(box);
   const auto run_shard = [&](int s, SetShard& a) {
     const uint64_t lo = chunks * s / shards, hi = chunks * (s + 1) / shards;
     if (in.capped) a.allowance = pass_lines ? double(part_lines(parts, lo, hi)) / double(pass_lines) : 0.0;
     stream_pass_lines(
-        store, x, parts, lo, hi, pass, progress,
-        [&](linestore::DecodedChunk& chunk, uint64_t c) { chunk_faces(box, chunk, x, c); },
+        store, x, parts, lo, hi, pass, progress, &sides,
+        [&](const linestore::DecodedChunk& chunk, uint64_t c) { check_chunk_faces(chunk, x, c); },
         [&](const linestore::DecodedChunk& chunk, uint32_t l) {
           const Event* ev = chunk.events.data() + chunk.first[l];
           const int m = static_cast<int>(chunk.first[l + 1] - chunk.first[l]);

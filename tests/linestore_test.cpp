@@ -278,6 +278,71 @@ TEST(LineStore, DecodingIntoPassOrderEqualsDecodingAndGathering) {
   }
 }
 
+// With a table of sides (EventSides: records of 16 bytes, as a pass's box
+// keeps them), each kept patch event comes out with the side it turns
+// forward along the line in entry_ar and the other in exit_ar, the rest as
+// decoded; a kept event of a child box or of a patch past the table marks
+// the chunk (foreign_events), one in a line not kept does not.
+TEST(LineStore, DecodingWithSidesWritesEachEventsFaces) {
+  struct Sides {
+    int side[2];
+    int other = 7;
+    int pad = 0;
+  };
+  std::mt19937 rng(11);
+  std::vector<Sides> table(5'000'001);
+  for (size_t k = 0; k < table.size(); ++k) {
+    table[k].side[0] = static_cast<int>(k % 1000);
+    table[k].side[1] = -1 - static_cast<int>(k % 3);
+  }
+  DecodedChunk whole, gathered, direct;
+  std::vector<uint32_t> place;
+  for (int trial = 0; trial < 12; ++trial) {
+    auto lines = random_lines(std::uniform_int_distribution<size_t>(1, 2000)(rng), rng);
+    for (LineRecord& l : lines)
+      for (Event& e : l.events) {
+        e.kind = Event::patch;
+        e.id %= 4'000'000;  // inside even the cut table
+        e.entry_ar = e.exit_ar = kNoAr;
+      }
+    // A foreign event in the first line: a child box, or a patch past a table cut short.
+    const bool child = trial % 3 == 1, cut_table = trial % 3 == 2;
+    lines[0].events.push_back(Event(child ? Event::child_box : Event::patch, 4'999'999, false, child ? 3u : kNoAr,
+                                    child ? 4u : kNoAr));
+    const size_t count = cut_table ? 4'999'999 : table.size();
+    std::vector<uint32_t> order(lines.size());
+    std::iota(order.begin(), order.end(), 0u);
+    uint64_t events = 0;
+    const std::string raw = encode_lines(flat(lines), order.data(), events);
+    const auto* data = reinterpret_cast<const unsigned char*>(raw.data());
+    ASSERT_TRUE(decode_chunk(data, raw.size(), lines.size(), events, whole));
+    std::shuffle(order.begin(), order.end(), rng);
+    const size_t take = std::uniform_int_distribution<size_t>(1, lines.size())(rng);
+    gather_lines(whole, order.data(), take, gathered);
+    const EventSides sides{table.data(), sizeof(Sides), count};
+    ASSERT_TRUE(decode_chunk_lines(data, raw.size(), lines.size(), events, order.data(), take, sides, place, direct));
+    ASSERT_EQ(direct.first, gathered.first);
+    bool foreign = false;
+    for (size_t i = 0; i < gathered.events.size(); ++i) {
+      Event expected = gathered.events[i];
+      if (expected.kind != Event::patch || expected.id >= count) {
+        foreign = true;
+      } else {
+        const Sides& t = table[expected.id];
+        expected.entry_ar = static_cast<uint32_t>(expected.along ? t.side[0] : t.side[1]);
+        expected.exit_ar = static_cast<uint32_t>(expected.along ? t.side[1] : t.side[0]);
+      }
+      ASSERT_EQ(direct.events[i], expected) << "trial " << trial << ", event " << i;
+    }
+    EXPECT_EQ(direct.foreign_events, foreign) << "trial " << trial;
+    EXPECT_EQ(foreign, trial % 3 != 0 && std::find(order.begin(), order.begin() + take, 0u) != order.begin() + take);
+    // Without the table the same chunk decodes as it always did, unmarked.
+    ASSERT_TRUE(decode_chunk_lines(data, raw.size(), lines.size(), events, order.data(), take, place, direct));
+    EXPECT_EQ(records(direct), records(gathered));
+    EXPECT_FALSE(direct.foreign_events);
+  }
+}
+
 std::string open_error(const std::filesystem::path& path, int chunk = -1) {
   try {
     BoxFileReader reader(path);
