@@ -109,6 +109,7 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
         [&](uint64_t from, uint64_t n, Rng&, std::vector<std::pair<uint64_t, double>>& out) {
           uint64_t shifted = ~uint64_t{0};  // the replica and emitter of `points`
           std::optional<ShiftedHalton> points;
+          std::optional<PatchSampler> sampler;  // the emitter's, when it is a face
           double u[4];
           for (uint64_t i = from; i < from + n; ++i) {
             const uint64_t r = i / m, j = i % m;
@@ -116,6 +117,8 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
             if (r * emitters.size() + e != shifted) {
               shifted = r * emitters.size() + e;
               points.emplace(make_rng(seed, kPilotStream, kShiftIndex + shifted));
+              if (const int f = emitters[e]; f >= 0)
+                sampler.emplace(mesh, mesh.patches[mesh.face_patch[f]], mesh.face_normal(f));
             }
             points->point(j - first[e], u);
             const int emitter = emitters[e];
@@ -125,8 +128,8 @@ Pilot run_pilot(const Scene& scene, const PatchMesh& mesh, const Hierarchy* h, u
               org = light.options.position;
               dir = light.sample(u[0], u[1], u[2]);
             } else {
-              org = uniform_point(mesh, mesh.patches[mesh.face_patch[emitter]], u[0], u[1]);
-              dir = cosine_direction(mesh.face_normal(emitter), u[2], u[3]);
+              org = sampler->point(u[0], u[1]);
+              dir = sampler->direction(u[2], u[3]);
             }
             const int met = met_from(emitter, org, dir);
             if (met < 0) continue;

@@ -634,9 +634,10 @@ class Builder {
   // its own area, 5.5 for a tiny one).
   LooseGrid::Region smaller_reach(int a) const {
     LooseGrid::Region r;
+    const Bounds full = reach(a);  // every level where a partner may be as large as a
     for (int level = 0; level <= LooseGrid::kLevels; ++level) {
-      const double cell = plain_->cell_size(level);
-      r.at[level] = level == LooseGrid::kLevels ? reach(a) : reach(a, std::min(items_[a].area, 6 * cell * cell));
+      const double cell = plain_->cell_size(level), most = 6 * cell * cell;
+      r.at[level] = level == LooseGrid::kLevels || most >= items_[a].area ? full : reach(a, most);
     }
     return r;
   }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 namespace mpath {
@@ -43,10 +44,14 @@ Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, Rng& rng) {
   return triangle_point(a, b, c, u, v);
 }
 
-// The share of quad v0 v1 v2 v3's area in its first triangle (v0, v1, v3).
+// The areas of quad v0 v1 v2 v3's two triangles, (v0, v1, v3) and (v2, v3, v1).
+std::pair<double, double> quad_areas(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Vec3& v3) {
+  return {0.5 * length(cross(v1 - v0, v3 - v0)), 0.5 * length(cross(v3 - v2, v1 - v2))};
+}
+
+// The share of quad v0 v1 v2 v3's area in its first triangle.
 double quad_split(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Vec3& v3) {
-  const double a1 = 0.5 * length(cross(v1 - v0, v3 - v0));
-  const double a2 = 0.5 * length(cross(v3 - v2, v1 - v2));
+  const auto [a1, a2] = quad_areas(v0, v1, v2, v3);
   return a1 / (a1 + a2);
 }
 
@@ -84,8 +89,7 @@ Vec3 uniform_point(const PatchMesh& mesh, const Patch& p, Rng& rng) {
   const Vec3& v2 = mesh.vertices[p.v[2]];
   if (p.is_triangle()) return triangle_point(v0, v1, v2, rng);
   const Vec3& v3 = mesh.vertices[p.v[3]];
-  const double a1 = 0.5 * length(cross(v1 - v0, v3 - v0));
-  const double a2 = 0.5 * length(cross(v3 - v2, v1 - v2));
+  const auto [a1, a2] = quad_areas(v0, v1, v2, v3);
   if (uniform(rng) * (a1 + a2) < a1) return triangle_point(v0, v1, v3, rng);
   return triangle_point(v2, v3, v1, rng);
 }
