@@ -46,12 +46,13 @@ uint64_t over_lines(const PatchMesh& mesh, uint64_t lines, unsigned long long se
   std::vector<uint64_t> hits(shards, 0);
   tbb::parallel_for(0, shards, [&](int s) {
     Rng rng = make_rng(seed, 2, (static_cast<unsigned long long>(pass) << 20) + s);
+    Rng order = pass_order_rng(seed, pass, s);
     auto shard_trace = trace();  // per-shard state
-    for (uint64_t i = lines * s / shards; i < lines * (s + 1) / shards; ++i) {
+    for_each_pass_line(lines * s / shards, lines * (s + 1) / shards, order, [&](uint64_t i) {
       double u[4];
       points.point(i, rng, u);
       hits[s] += shard_trace(sampler.sample(u));
-    }
+    });
   });
   uint64_t total = 0;
   for (uint64_t h : hits) total += h;

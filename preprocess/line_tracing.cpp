@@ -52,7 +52,11 @@ ChunkTracer::ChunkTracer(const Options& options, const PatchMesh& mesh, const Hi
       seed_(options.lines.seed),
       total_(lines),
       chunk_lines_(static_cast<uint64_t>(options.store.chunk_lines)),
-      chunks_((total_ + chunk_lines_ - 1) / chunk_lines_) {
+      chunks_((total_ + chunk_lines_ - 1) / chunk_lines_),
+      order_([&] {
+        Rng keys = make_rng(seed_, kStoreLineStream, (static_cast<unsigned long long>(box) << 40) | (1ull << 39));
+        return IndexPermutation(total_, keys);
+      }()) {
   uint32_t offset = 0;
   for (int c : box_.children) {
     child_offset_.push_back(offset);
@@ -163,7 +167,7 @@ void ChunkTracer::trace(uint64_t chunk, TracedChunk& out, BoxTally& tally) const
   if (class_span_ > 0) per_crossing.add(owner_);
   for (uint64_t i = 0; i < n; ++i) {
     double u[4];
-    sequence_.point(first + i, rng, u);
+    sequence_.point(order_(first + i), rng, u);
     const GlobalLine line = sampler_.sample(u);
     const size_t begin = events.size();
     traced.first.push_back(static_cast<uint32_t>(begin));

@@ -70,6 +70,10 @@ class ChunkTracer {
   LineSequence sequence_;
   unsigned long long seed_;
   uint64_t total_, chunk_lines_, chunks_;
+  // Line k of the box (chunk after chunk) is point order_(k) of the
+  // sequence: a chunk holds lines from the whole sequence, not neighbours in
+  // it (IndexPermutation; the store identity's "lines.order").
+  IndexPermutation order_;
   std::vector<uint32_t> child_offset_;  // first AR of each child in the child-crossing counts
   int class_span_ = 0;                  // transparent boxes: classes counted per patch side
   // Transparent boxes, per patch of the box (local id): the box holding it

@@ -18,6 +18,11 @@ constexpr unsigned kGlobalLineStream = 2;
 
 }  // namespace
 
+Rng pass_order_rng(unsigned long long seed, unsigned pass, int shard) {
+  // The global lines' stream, with a bit above every (pass, shard) key of theirs.
+  return make_rng(seed, kGlobalLineStream, (1ull << 39) | ((static_cast<unsigned long long>(pass) << 20) + shard));
+}
+
 std::vector<double> forecast_crossings(const PatchMesh& mesh, double lines) {
   const double box_area = line_box(mesh.bounds).surface_area();
   std::vector<double> c(mesh.face_count());
@@ -53,9 +58,10 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
     const auto [lo, hi] = part(s);
     ShardAccumulator& a = acc[s];
     Rng rng = make_rng(seed, kGlobalLineStream, (static_cast<unsigned long long>(pass) << 20) + s);
+    Rng order = pass_order_rng(seed, pass, s);
     std::vector<LineHit> hits;
     uint64_t since_report = 0;
-    for (uint64_t i = lo; i < hi; ++i) {
+    for_each_pass_line(lo, hi, order, [&](uint64_t i) {
       double u[4];
       points.point(i, rng, u);
       const GlobalLine line = sampler.sample(u);
@@ -66,7 +72,7 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
         progress.advance(since_report);
         since_report = 0;
       }
-    }
+    });
     progress.advance(since_report);
   });
   progress.finish();

@@ -11,6 +11,7 @@
 
 #include "config.h"
 #include "radiosity_state.h"
+#include "sampling.h"
 #include "tracer.h"
 #include "iteration.h"
 #include "transport.h"
@@ -33,6 +34,26 @@ uint64_t coverage_lines(const PatchMesh& mesh);
 // coverage_lines), so lines follow the power left to distribute.
 IterationLog solve_classic(const Options& options, const PatchMesh& mesh, const Tracer& tracer,
                            RadiosityState& state, int shards);
+
+// The random stream of shard `shard`'s line order in classic pass `pass`.
+Rng pass_order_rng(unsigned long long seed, unsigned pass, int shard);
+
+// Calls f(i) for each line index i in lo..hi-1 in the order a classic pass's
+// shard takes them: a pseudo-random permutation of the range
+// (IndexPermutation, its keys from `order`, pass_order_rng). Power a face
+// gathers during a pass leaves on the next line crossing it. Randomised
+// Halton lines taken by index come in a pattern (consecutive indices
+// alternate halves of the first coordinate, and so on), and even shuffled
+// block by block the lines near one another in the sequence are spread
+// evenly, so that the next line crossing a small face avoids the one the
+// power came by: either way the answer is biased (docs/algorithm.md, "Order
+// of lines in a pass"). Independent random lines are drawn in call order,
+// so for them the order changes nothing.
+template <typename F>
+void for_each_pass_line(uint64_t lo, uint64_t hi, Rng& order, F&& f) {
+  const IndexPermutation permutation(hi - lo, order);
+  for (uint64_t k = lo; k < hi; ++k) f(lo + permutation(k - lo));
+}
 
 // One pass of `lines` fresh global lines; exposed for tests and benchmarks.
 PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, uint64_t lines,

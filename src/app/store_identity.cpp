@@ -49,6 +49,10 @@ std::map<std::string, std::string> store_identity(const Options& o, const PatchM
       {"hierarchy.transport", o.solver.method == SolverMethod::hierarchical ? o.hierarchy.transport : "none"},
       {"lines.seed", std::to_string(o.lines.seed)},
       {"lines.sequence", o.lines.sequence},
+      // Which points of the sequence a chunk holds: since December 2026 a
+      // permutation of the whole box's (docs/algorithm.md, "Order of lines in
+      // a pass"); a store of consecutive points is traced again.
+      {"lines.order", "permuted"},
       {"store.chunk_lines", std::to_string(o.store.chunk_lines)},
   };
 }

@@ -175,6 +175,39 @@ void shifted_halton(uint64_t index, const double shift[4], double u[4]) {
   }
 }
 
+IndexPermutation::IndexPermutation(uint64_t n, Rng& rng) : n_(n) {
+  unsigned bits = 0;
+  while (bits < 64 && (uint64_t{1} << bits) < n) ++bits;
+  low_bits_ = bits / 2;
+  high_bits_ = bits - low_bits_;
+  for (uint64_t& k : keys_) k = (static_cast<uint64_t>(rng()) << 32) | rng();
+}
+
+namespace {
+// splitmix64's finaliser: every input bit moves every output bit.
+uint64_t mix(uint64_t x) {
+  x ^= x >> 30;
+  x *= 0xbf58476d1ce4e5b9ull;
+  x ^= x >> 27;
+  x *= 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+}  // namespace
+
+uint64_t IndexPermutation::round_trip(uint64_t x) const {
+  if (high_bits_ == 0) return x;  // n <= 1
+  const uint64_t low_mask = (uint64_t{1} << low_bits_) - 1;
+  const uint64_t high_mask = high_bits_ >= 64 ? ~uint64_t{0} : (uint64_t{1} << high_bits_) - 1;
+  uint64_t low = x & low_mask, high = (x >> low_bits_) & high_mask;
+  // Each round changes one half by a function of the other: a bijection
+  // whatever the function, so the four together are one too.
+  for (int r = 0; r < 4; r += 2) {
+    high = (high + mix(low ^ keys_[r])) & high_mask;
+    low = (low + mix(high ^ keys_[r + 1])) & low_mask;
+  }
+  return (high << low_bits_) | low;
+}
+
 BoxLineSampler::BoxLineSampler(const Bounds& box) : box_(box) {
   const Vec3 s = box.size();
   const double areas[3] = {s.y * s.z, s.z * s.x, s.x * s.y};

@@ -104,4 +104,29 @@ class LineSequence {
   ShiftedHalton points_;
 };
 
+// A pseudo-random bijection of [0, n), computed index by index in constant
+// memory: a four-round Feistel network on the smallest power of two at
+// least n (each round adds to one half of the bits a mix of the other half
+// and a key drawn from `rng`), walked again from its own output until it
+// lands below n (fewer than two walks on average). Passes take randomised
+// Halton lines in such an order, and stores hold them so: consecutive
+// indices of the sequence are tied to one another, and power a face gathers
+// during a pass leaves on the next line crossing it (docs/algorithm.md,
+// "Order of lines in a pass").
+class IndexPermutation {
+ public:
+  IndexPermutation(uint64_t n, Rng& rng);
+  uint64_t operator()(uint64_t i) const {
+    do i = round_trip(i);
+    while (i >= n_);
+    return i;
+  }
+
+ private:
+  uint64_t round_trip(uint64_t x) const;
+  uint64_t n_;
+  unsigned low_bits_ = 0, high_bits_ = 0;
+  uint64_t keys_[4] = {};
+};
+
 }  // namespace mpath
