@@ -969,7 +969,7 @@ from this run's CSVs; what follows explains them, from the profiles in
   1.45 -> 1.38x, office3 2.87 -> 3.11x, soda 1.42 -> 1.74x; the host ran
   classic 5-20 % slower in this run than in the last on every scene but
   OFFICE, where it ran faster).
-- **This run, on another host** (December 7, 2026, at 5d53f7e: an Intel
+- **The run at 5d53f7e, on another host** (December 7, 2026, at 5d53f7e: an Intel
   Xeon where the evaluations before ran on an AMD EPYC; since 7ce4b49 the
   shot files' smaller frames, f944a20, and the stored lights' shot, which
   none of these scenes has). Every error is that of the evaluation before
@@ -985,6 +985,32 @@ from this run's CSVs; what follows explains them, from the profiles in
   1.63x, BIG ROOM 1.64 -> 1.59x, OFFICE 3.76 -> 3.70x, office2 1.38 ->
   1.32x, office3 3.11 -> 2.73x, soda 1.74 -> 1.64x). Compare ratios
   within a run, not across hosts.
+- **This run: lines in a permuted order** (December 7, 2026, at 6371edb,
+  on the AMD EPYC of the evaluations before 5d53f7e). Since d0aa60a a
+  classic pass takes its randomised Halton lines, and a store's chunks hold
+  theirs, in a pseudo-random permutation of their indices
+  (docs/algorithm.md, "Order of lines in a pass"). Before, classic passes
+  took them by index and a chunk held consecutive points, and the power a
+  face gathers in a pass, which leaves on the next line crossing it,
+  followed patterns of the sequence: a lit cube came out 0.6-4 % off at 4M
+  lines, and the long classic references of these pages carried it too
+  (office2's largest objects up to 0.5 % off at 64M lines). That is what the
+  object-by-object check flagged on office2 in the run before (object 46,
+  -0.24 %, 4.6 sigma, "a bias"): now 0.6 sigma RMS over its objects, the
+  largest 1.3 sigma. office3's object 3 still differs by +0.04 % (3.8
+  sigma, 5.3 before), on an object whose noise is a hundredth of a per
+  cent; stored lines carry a face's power back and forth along the same
+  lines in every pass (a lit cube's wall of reflectance 0.9 comes out
+  0.04 % high in stored Multipath, whichever sequence). The relative RMS
+  errors moved by at most 0.1 point at any budget on either side (the
+  references' patterns were small beside the runs' noise). Against the
+  run at e2ab018 on this host the same morning, before the change: first
+  runs ROOM 1.95 -> 1.82x, BIG ROOM 1.77 -> 1.64x, OFFICE 3.84 -> 4.20x,
+  office2 1.48 -> 1.47x, office3 3.07 -> 3.04x, soda 1.53 -> 1.61x;
+  kept-store solves 10.70 -> 9.26x, 9.31 -> 8.64x, 13.82 -> 14.58x, 6.89
+  -> 6.25x, 12.94 -> 11.36x, 5.90 -> 5.71x. The runs' seconds moved by
+  -26 to +29 % from one run to the other, both methods, both ways, where
+  the stores' sizes agree within 0.6 %: the host's, not the change's.
 - **Where the error lies.** The table under each scene splits each
   method's squared error by box. Wherever the hierarchy gives a small
   bright box lines of its own (a lamp in its shade: ROOM's, BIG ROOM's,
@@ -1023,31 +1049,37 @@ from this run's CSVs; what follows explains them, from the profiles in
   of the error ratio at equal lines, less what it costs beyond a classic
   solve of the same lines.
 
-  BIG ROOM's table shows why that ratio stays at 0.69-0.74 (2M lines,
+  BIG ROOM's table shows why that ratio stays at 0.71-0.75 (2M lines,
   with the second shot in both methods):
-  - 56 % of classic's squared error is inside the ceiling lamp's shade, and
-    the lamp's box (10 % of the lines) cuts it to 0.26 of classic's.
-  - The other 44 % is in the walls, the floor and the furniture groups.
+  - 63 % of classic's squared error is inside the ceiling lamp's shade, and
+    the lamp's box (10 % of the lines) cuts it to 0.24 of classic's.
+  - The other 37 % is in the walls, the floor and the furniture groups.
     Only the root's lines (90 %) carry it, and there the hierarchical error
-    is 0.54-0.99 of classic's box by box.
+    is 1.00-1.02 of classic's box by box (0.54-0.99 against the references
+    of the run before, whose lines followed the Halton sequence's order).
   - With no error left in the lamp at all, the squared error would still be
-    about 0.44 of classic's. That bounds the first run near 2.3x before the
-    preprocess's own costs, below the 2.5x target; the second shot, which
-    cut both methods' error to a third, did not move that bound.
+    about 0.37 of classic's, an error ratio of 0.61 at equal lines. A first
+    run costs about what classic's solve does at equal lines (2.17 against
+    2.14 s at 4M, 0.81 against 1.00 s at 1M), and classic's seconds grow
+    more slowly than its lines at these budgets (1.00 to 3.59 s from 1M to
+    8M): reaching 2.5x would take the lamp's error gone and a cheaper line
+    both. The second shot, which cut both methods' error to a third, did
+    not move that.
   - What is left is a cheaper line: the preprocess would have to trace,
     count, encode and compress a line for clearly less than a classic pass
     traces and transports one.
-- **office2's first run: the target missed** (1.32x against 1.5x, its
-  budgets 1.04-2.18x; 1.38x in the evaluation at 7ce4b49 on another host,
-  1.45x at 6c08a0c and 1.57x at 0a89dc3, before the second shot). Its
-  first-run speed-up falls with lines (2.18x at 500,000, 1.04x at 4M):
-  the error ratio at equal lines is about one, so a first run gains only
-  what classic's later passes cost beyond the store's tracing and
-  iterations, and at 4M lines the preprocess alone (3.00 s) takes four
-  fifths of classic's solve (3.64 s).
+- **office2's first run: the target missed** (1.47x against 1.5x, its
+  budgets 1.13-2.09x, 1.51x in CPU seconds; 1.48x in the run before this
+  one, 1.32x at 5d53f7e on an Intel host, 1.45x at 6c08a0c and 1.57x at
+  0a89dc3, before the second shot). Its first-run speed-up falls with
+  lines (2.09x at 500,000, 1.13x at 4M): the error ratio at equal lines is
+  about one, so a first run gains only what classic's later passes cost
+  beyond the store's tracing and iterations, and at 4M lines the
+  preprocess alone (2.59 s) takes three quarters of classic's solve
+  (3.48 s).
   - 58 % of classic's squared error is in the room's walls, ceiling and
     desks (the root) and 31 % more in two wall slabs that get few or no
-    lines of their own; the hierarchical runs err there 1.14-1.32 times as
+    lines of their own; the hierarchical runs err there 1.14-1.28 times as
     much as classic, since the pilot gives the subscenes 7 % of the lines
     and the root keeps 93 %.
   - The fluorescent strip's trough, which held a quarter of classic's
@@ -1059,14 +1091,14 @@ from this run's CSVs; what follows explains them, from the profiles in
     that many (its error 3 % less); a pilot taught the second shot
     (docs/performance.md, "Second-shot budget") moved ROOM's and BIG
     ROOM's budgets by 1.5-5 points and gained nothing there. The error
-    ratio at equal lines is 1.00-1.10 (0.90-0.97 before).
+    ratio at equal lines is 1.00-1.11 (0.90-0.97 before).
 - **Kept-store solves.** A kept-store solve reads its first and second
   shots from the store (`first_shot.bin`, `second_shot.bin`, traced once
   by `mpath-preprocess`), so it is the transport loop over the stored
   lines and little else (no BVH where every face is carried), while
   classic traces its first and second shots on every solve. soda's
-  kept-store solve (5.34x here, 6.88x in the evaluation before this one on
-  another host) is the shortest beside classic's: its fixed second (loading, opening the
+  kept-store solve (5.71x here, 5.34x at 5d53f7e on an Intel host, 6.88x at
+  7f78efc) is the shortest beside classic's: its fixed second (loading, opening the
   store, the outputs) stays whatever the lines; these times include each
   program's start-up, about 0.03 s with the exec that asks for huge pages,
   and at 1M lines that is a sixth of a short solve.

@@ -6,7 +6,9 @@
 
 #include <nlohmann/json.hpp>
 #include <algorithm>
+#include <iterator>
 #include <random>
+#include <set>
 
 #include "line_tracing.h"
 #include "scene_readers.h"
@@ -117,6 +119,66 @@ TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
   }
   for (size_t i = 0; i < from_store.phi.size(); ++i) ASSERT_NEAR(from_store.phi[i], in_memory.phi[i], 1e-12 * std::fabs(in_memory.phi[i]));
   EXPECT_LT(std::fabs(from_store.energy_residual()) / from_store.emitted_total(), 1e-10);
+}
+
+// A box's randomised Halton lines: the box holds exactly the points 0..N-1
+// of its sequence, but a chunk holds points from the whole sequence, not a
+// run of neighbours (docs/algorithm.md, "Order of lines in a pass"). Lines
+// are compared by what they meet (patch and direction, in order); with 8,466
+// patches two lines rarely meet the same.
+TEST(Store, AChunkOfHaltonLinesHoldsPointsFromTheWholeSequence) {
+  Options o = test::test_options(16'384, 0, 0.002);
+  o.scene.file = std::string(MPATH_SOURCE_DIR) + "/configs/cornell_box/cornell_box.obj";
+  o.lines.sequence = "halton";
+  o.store.chunk_lines = 1024;
+  std::vector<std::string> warnings;
+  const Scene scene = load_scene(o.scene, o.mesh.curve_segments, warnings);
+  const PatchMesh mesh = build_mesh(scene, o.mesh.max_patch_area);
+  const Hierarchy flat = build_hierarchy(mesh, o.hierarchy, true);
+  const uint64_t total = static_cast<uint64_t>(o.lines.total);
+  const ChunkTracer chunks(o, mesh, flat, 0, total);
+  ASSERT_EQ(chunks.chunk_count(), 16u);
+
+  using Met = std::vector<std::pair<uint32_t, bool>>;
+  std::multiset<Met> stored, first_chunk;
+  TracedChunk traced;
+  BoxTally tally = chunks.empty_tally();
+  for (uint64_t c = 0; c < chunks.chunk_count(); ++c) {
+    chunks.trace(c, traced, tally);
+    const linestore::DecodedChunk& l = traced.lines;
+    for (size_t i = 0; i < l.lines(); ++i) {
+      Met met;
+      for (uint32_t k = l.first[i]; k < l.first[i + 1]; ++k) met.push_back({l.events[k].id, l.events[k].along});
+      stored.insert(met);
+      if (c == 0) first_chunk.insert(met);
+    }
+  }
+  // The sequence's points by index, traced here as the preprocessor traces them.
+  const Tracer tracer(mesh);
+  const LineSequence points(o.lines.sequence, o.lines.seed, 0);
+  const BoxLineSampler sampler(line_box(flat.boxes[0].bounds));
+  Rng unused = make_rng(0, 0, 0);
+  std::multiset<Met> sequence, first_points;
+  std::vector<LineHit> hits;
+  for (uint64_t i = 0; i < total; ++i) {
+    double u[4];
+    points.point(i, unused, u);
+    const GlobalLine line = sampler.sample(u);
+    tracer.all_hits(line.org, line.dir, line.length, hits);
+    order_ties(mesh, tracer.tie_epsilon(), hits, tracer.live_faces());
+    Met met;
+    for (const LineHit& h : hits) met.push_back({static_cast<uint32_t>(h.patch), h.along});
+    sequence.insert(met);
+    if (i < 1024) first_points.insert(met);
+  }
+  EXPECT_TRUE(stored == sequence);
+  // Chunk 0 against points 0..1023: drawn from all 16,384, about 1024 / 16 =
+  // 64 of them are among those (a binomial count, standard deviation 8);
+  // consecutive points would make all 1024 the same.
+  std::vector<Met> common;
+  std::set_intersection(first_chunk.begin(), first_chunk.end(), first_points.begin(), first_points.end(),
+                        std::back_inserter(common));
+  EXPECT_LT(common.size(), 128u);
 }
 
 TEST(Store, ShardedStoreEqualsOneMadeAtOnceAndRerunsSkipFinishedFiles) {
