@@ -211,15 +211,16 @@ INSTANTIATE_TEST_SUITE_P(Squares, FormFactor, ::testing::Values(false, true),
 // A closed unit cube, one patch a wall, each wall its own reflectance, lit
 // by its ceiling: the exact radiosities solve B = E + rho F B with Howell's
 // form factors (C-11 opposite, C-14 adjacent walls; a row sums to one).
+constexpr double kCubeRho[6] = {0.3, 0.2, 0.7, 0.5, 0.9, 0.6};  // floor, ceiling, y = 0, x = 1, y = 1, x = 0
+
 Scene lit_cube() {
   Scene scene;
   scene.file = "cube";
   const Vec3 p[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
   // Facing inward: floor, ceiling, y = 0, x = 1, y = 1, x = 0.
   const int quads[6][4] = {{0, 1, 2, 3}, {4, 7, 6, 5}, {0, 4, 5, 1}, {1, 5, 6, 2}, {2, 6, 7, 3}, {3, 7, 4, 0}};
-  const double rho[6] = {0.3, 0.2, 0.7, 0.5, 0.9, 0.6};
   for (int w = 0; w < 6; ++w) {
-    const int m = test::add_material(scene, "wall" + std::to_string(w), rho[w], w == 1 ? 1.0 / std::numbers::pi : 0.0);
+    const int m = test::add_material(scene, "wall" + std::to_string(w), kCubeRho[w], w == 1 ? 1.0 / std::numbers::pi : 0.0);
     test::add_quad(scene, p[quads[w][0]], p[quads[w][1]], p[quads[w][2]], p[quads[w][3]], m,
                    test::add_object(scene, "wall" + std::to_string(w)));
   }
@@ -228,7 +229,7 @@ Scene lit_cube() {
 
 // The cube's exact reflected radiosity B - E per wall (exitance 1 at the ceiling).
 std::vector<double> lit_cube_exact() {
-  const double rho[6] = {0.3, 0.2, 0.7, 0.5, 0.9, 0.6}, emit[6] = {0, 1, 0, 0, 0, 0};
+  const double emit[6] = {0, 1, 0, 0, 0, 0};
   const int opposite[6] = {1, 0, 4, 5, 2, 3};
   const double parallel = 0.19982489569838746, adjacent = (1 - parallel) / 4;
   std::vector<double> b(emit, emit + 6);
@@ -238,7 +239,7 @@ std::vector<double> lit_cube_exact() {
       double gathered = 0;
       for (int j = 0; j < 6; ++j)
         if (j != i) gathered += (j == opposite[i] ? parallel : adjacent) * b[j];
-      next[i] = emit[i] + rho[i] * gathered;
+      next[i] = emit[i] + kCubeRho[i] * gathered;
     }
     b = next;
   }

@@ -197,7 +197,7 @@ uint64_t mix(uint64_t x) {
 uint64_t IndexPermutation::round_trip(uint64_t x) const {
   if (high_bits_ == 0) return x;  // n <= 1
   const uint64_t low_mask = (uint64_t{1} << low_bits_) - 1;
-  const uint64_t high_mask = high_bits_ >= 64 ? ~uint64_t{0} : (uint64_t{1} << high_bits_) - 1;
+  const uint64_t high_mask = (uint64_t{1} << high_bits_) - 1;  // at most 32 bits
   uint64_t low = x & low_mask, high = (x >> low_bits_) & high_mask;
   // Each round changes one half by a function of the other: a bijection
   // whatever the function, so the four together are one too.
