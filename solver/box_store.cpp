@@ -249,6 +249,7 @@ BoxStore::BoxStore(const Options& options, const PatchMesh& mesh, std::optional<
   const fs::path manifest_path = options.store.dir / "manifest.json";
   manifest_ = checked ? std::move(checked->manifest) : linestore::read_manifest(manifest_path);
   check_against(options, mesh, manifest_path);
+  seed_ = options.lines.seed;
   lay_out_boxes(mesh);
   const std::exception_ptr damage = checked ? checked->damage : check_files(options.store.dir, manifest_);
   if (damage) std::rethrow_exception(damage);

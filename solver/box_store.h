@@ -105,6 +105,9 @@ class BoxStore {
   BoxStore(const Options& options, const PatchMesh& mesh, std::optional<CheckedFiles> checked = std::nullopt);
 
   const linestore::Manifest& manifest() const { return manifest_; }
+  // The store's lines.seed (its identity holds it): the passes' line orders
+  // depend on it (chunk_line_order).
+  unsigned long long seed() const { return seed_; }
   // The line-set data of a store of transparent boxes (hierarchy.transport =
   // "lines"), derived from every line at opening; null otherwise.
   const LineSets* line_sets() const { return line_sets_.get(); }
@@ -152,6 +155,7 @@ class BoxStore {
   mutable tbb::enumerable_thread_specific<Readers> readers_;
   std::shared_ptr<const LineSets> line_sets_;
   size_t ar_total_ = 0;
+  unsigned long long seed_ = 0;
 };
 
 // Transmittance of every AR from its counts (exposed for tests).

@@ -18,7 +18,7 @@ namespace {
 constexpr unsigned kFirstShotStream = 1;
 constexpr unsigned kLightStream = 6;
 constexpr unsigned long long kLightShiftIndex = 1ULL << 32;  // above any shard's index
-constexpr unsigned kEmitterShiftStream = 1000;  // above the line orders' 8 + box
+constexpr unsigned kEmitterShiftStream = 1000;
 
 double face_power(const RadiosityState& s, int f) {
   double p = 0;

@@ -21,7 +21,7 @@ using linestore::kNoAr;
 
 namespace {
 constexpr unsigned kUncarriedStream = 7;  // random stream of the local lines for uncarried power
-constexpr unsigned kLineOrderPurpose = 8;  // + box: the order of a pass through a chunk
+constexpr unsigned kLineOrderPurpose = 8;  // the order of a pass through a chunk
 }  // namespace
 
 void add_ar_state(const BoxStore& store, RadiosityState& state) {
@@ -598,10 +598,11 @@ double line_power(const Options& options, const BoxStore& store, const Iteration
   return log.first_unshot / static_cast<double>(store.lines());
 }
 
-void chunk_line_order(unsigned pass, int box, uint64_t chunk, size_t n, std::vector<uint32_t>& order) {
+void chunk_line_order(unsigned long long seed, unsigned pass, int box, uint64_t chunk, size_t n,
+                      std::vector<uint32_t>& order) {
   order.resize(n);
   std::iota(order.begin(), order.end(), 0u);
-  Rng rng = make_rng(pass, kLineOrderPurpose + static_cast<unsigned>(box), chunk);
+  Rng rng = make_rng(derived_seed(seed, pass, static_cast<unsigned long long>(box)), kLineOrderPurpose, chunk);
   std::shuffle(order.begin(), order.end(), rng);
 }
 

@@ -83,11 +83,16 @@ PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const 
                            uint64_t* uncarried = nullptr);
 
 // The order in which pass `pass` takes the n lines of chunk `chunk` of box
-// `box`: a pseudo-random permutation, new every pass. Chunks are stored sorted
-// by what their lines meet; power a face gathers leaves on the next line
-// crossing it, and any order tied to the lines' geometry sends it along a
-// line like the one it came by (docs/algorithm.md, "Line order in a pass").
-void chunk_line_order(unsigned pass, int box, uint64_t chunk, size_t n, std::vector<uint32_t>& order);
+// `box` of a store traced with `seed` (lines.seed): a pseudo-random
+// permutation, new every pass. Chunks are stored sorted by what their lines
+// meet; power a face gathers leaves on the next line crossing it, and any
+// order tied to the lines' geometry sends it along a line like the one it
+// came by (docs/algorithm.md, "Order of lines in a pass"). The seed is in
+// it because a chunk's k-th line meets nearly the same faces in every seed's
+// store: with one order for all, every seed's pass met the faces in the
+// same sequence, and the seeds shared an error their spread did not show.
+void chunk_line_order(unsigned long long seed, unsigned pass, int box, uint64_t chunk, size_t n,
+                      std::vector<uint32_t>& order);
 
 // Runs f(0) .. f(boxes - 1), the passes of the boxes of one depth: side by
 // side on the threads with one MPI rank; one after another with several,
@@ -159,7 +164,7 @@ void stream_pass_lines(const BoxStore& store, int b, const std::vector<ChunkPart
     const uint64_t c = parts[i].chunk;
     const size_t n = store.chunk_lines(b, c);
     const size_t take = std::min<size_t>(n, parts[i].lines);
-    chunk_line_order(pass, b, c, n, order);
+    chunk_line_order(store.seed(), pass, b, c, n, order);
     store.read_lines(b, c, order.data(), take, lines, sides);
     check(lines, c);
     for (size_t k = 0; k < take; ++k) {

@@ -106,7 +106,7 @@ TEST(Store, StoredLineSolveEqualsAnInMemorySolveOverTheSameLines) {
       std::vector<LineHit> hits;
       std::vector<uint32_t> order;
       for (uint64_t c = records.size() * s / 2; c < records.size() * (s + 1) / 2; ++c) {
-        chunk_line_order(2 * pass, 0, c, records[c].lines(), order);  // the root's pass of iteration p is rotation 2p
+        chunk_line_order(store.seed(), 2 * pass, 0, c, records[c].lines(), order);  // the root's pass of iteration p is rotation 2p
         for (uint32_t l : order) {
           hits.clear();
           for (uint32_t k = records[c].first[l]; k < records[c].first[l + 1]; ++k)

@@ -194,6 +194,10 @@ uint64_t mix(uint64_t x) {
 }
 }  // namespace
 
+unsigned long long derived_seed(unsigned long long seed, unsigned long long a, unsigned long long b) {
+  return mix(mix(mix(seed) ^ a) ^ b);
+}
+
 uint64_t IndexPermutation::round_trip(uint64_t x) const {
   if (high_bits_ == 0) return x;  // n <= 1
   const uint64_t low_mask = (uint64_t{1} << low_bits_) - 1;

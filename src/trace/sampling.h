@@ -14,6 +14,11 @@ using Rng = pcg32;
 // Independent stream for (seed, purpose, shard): same inputs, same numbers.
 Rng make_rng(unsigned long long seed, unsigned purpose, unsigned long long shard);
 
+// A seed of its own for (seed, a, b), for streams named by more numbers than
+// make_rng's purpose and shard hold: distinct seeds give distinct results
+// for the same a and b (each step is a bijection of 64 bits).
+unsigned long long derived_seed(unsigned long long seed, unsigned long long a, unsigned long long b);
+
 // rng() * 2^-32: exact, as std::ldexp(rng(), -32) was, without its call.
 inline double uniform(Rng& rng) { return static_cast<double>(rng()) * 0x1p-32; }
 
