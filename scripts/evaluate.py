@@ -985,8 +985,8 @@ from this run's CSVs; what follows explains them, from the profiles in
   1.63x, BIG ROOM 1.64 -> 1.59x, OFFICE 3.76 -> 3.70x, office2 1.38 ->
   1.32x, office3 3.11 -> 2.73x, soda 1.74 -> 1.64x). Compare ratios
   within a run, not across hosts.
-- **This run: lines in a permuted order** (December 7, 2026, at 6371edb,
-  on the AMD EPYC of the evaluations before 5d53f7e). Since d0aa60a a
+- **The run before: lines in a permuted order** (December 7, 2026, at
+  6371edb, on the AMD EPYC of the evaluations before 5d53f7e). Since d0aa60a a
   classic pass takes its randomised Halton lines, and a store's chunks hold
   theirs, in a pseudo-random permutation of their indices
   (docs/algorithm.md, "Order of lines in a pass"). Before, classic passes
@@ -999,9 +999,7 @@ from this run's CSVs; what follows explains them, from the profiles in
   -0.24 %, 4.6 sigma, "a bias"): now 0.6 sigma RMS over its objects, the
   largest 1.3 sigma. office3's object 3 still differs by +0.04 % (3.8
   sigma, 5.3 before), on an object whose noise is a hundredth of a per
-  cent; stored lines carry a face's power back and forth along the same
-  lines in every pass (a lit cube's wall of reflectance 0.9 comes out
-  0.04 % high in stored Multipath, whichever sequence). The relative RMS
+  cent. The relative RMS
   errors moved by at most 0.1 point at any budget on either side (the
   references' patterns were small beside the runs' noise). Against the
   run at e2ab018 on this host the same morning, before the change: first
@@ -1011,6 +1009,27 @@ from this run's CSVs; what follows explains them, from the profiles in
   -> 6.25x, 12.94 -> 11.36x, 5.90 -> 5.71x. The runs' seconds moved by
   -26 to +29 % from one run to the other, both methods, both ways, where
   the stores' sizes agree within 0.6 %: the host's, not the change's.
+- **This run: each seed's passes in an order of their own** (December 7,
+  2026, at bbd65ff, the same host). A stored pass takes each chunk's lines
+  in a pseudo-random order, which was seeded by the pass, the box and the
+  chunk alone: the same in every seed's solve. A chunk's lines are stored
+  sorted by what they meet, so every seed's passes met the faces in nearly
+  the same sequence, and the seeds shared an error their spread did not
+  show (a lit cube's walls up to 0.04 % off, 4-14 standard errors of the
+  mean of 8 seeds; docs/algorithm.md, "Order of lines in a pass"). Since
+  bbd65ff the order takes the store's seed too, so the three seeds of
+  every ladder and the references are independent runs. The relative RMS
+  errors moved by at most 0.03 points at any budget (the shared part was
+  small beside a patch's noise). The object-by-object check: 0.4-0.7 sigma
+  RMS over the objects on five scenes; office3 2.3 sigma RMS, its object
+  3 +0.04 % at 3.9 sigma (3.8 in the run before), so that one is not the
+  order's. Against the run before on this host the same day: first runs
+  ROOM 1.82 -> 2.02x, BIG ROOM 1.64 -> 1.64x, OFFICE 4.20 -> 4.47x,
+  office2 1.47 -> 1.42x, office3 3.04 -> 2.78x, soda 1.61 -> 1.49x;
+  kept-store solves 9.26 -> 10.96x, 8.64 -> 8.92x, 14.58 -> 14.98x, 6.25 ->
+  6.50x, 11.36 -> 12.11x, 5.71 -> 6.27x. The medians of the runs' seconds
+  per scene and method moved by -14 to +10 % (classic's as much as the
+  hierarchical runs'), where the stores' sizes are the same: the host's.
 - **Where the error lies.** The table under each scene splits each
   method's squared error by box. Wherever the hierarchy gives a small
   bright box lines of its own (a lamp in its shade: ROOM's, BIG ROOM's,
@@ -1059,27 +1078,27 @@ from this run's CSVs; what follows explains them, from the profiles in
     of the run before, whose lines followed the Halton sequence's order).
   - With no error left in the lamp at all, the squared error would still be
     about 0.37 of classic's, an error ratio of 0.61 at equal lines. A first
-    run costs about what classic's solve does at equal lines (2.17 against
-    2.14 s at 4M, 0.81 against 1.00 s at 1M), and classic's seconds grow
-    more slowly than its lines at these budgets (1.00 to 3.59 s from 1M to
+    run costs about what classic's solve does at equal lines (2.13 against
+    2.10 s at 4M, 0.79 against 1.02 s at 1M), and classic's seconds grow
+    more slowly than its lines at these budgets (1.02 to 3.65 s from 1M to
     8M): reaching 2.5x would take the lamp's error gone and a cheaper line
     both. The second shot, which cut both methods' error to a third, did
     not move that.
   - What is left is a cheaper line: the preprocess would have to trace,
     count, encode and compress a line for clearly less than a classic pass
     traces and transports one.
-- **office2's first run: the target missed** (1.47x against 1.5x, its
-  budgets 1.13-2.09x, 1.51x in CPU seconds; 1.48x in the run before this
-  one, 1.32x at 5d53f7e on an Intel host, 1.45x at 6c08a0c and 1.57x at
-  0a89dc3, before the second shot). Its first-run speed-up falls with
-  lines (2.09x at 500,000, 1.13x at 4M): the error ratio at equal lines is
-  about one, so a first run gains only what classic's later passes cost
-  beyond the store's tracing and iterations, and at 4M lines the
-  preprocess alone (2.59 s) takes three quarters of classic's solve
-  (3.48 s).
+- **office2's first run: the target missed** (1.42x against 1.5x, its
+  budgets 1.04-2.14x, 1.47x in CPU seconds; 1.47x and 1.48x in the two
+  runs before this one, 1.32x at 5d53f7e on an Intel host, 1.45x at
+  6c08a0c and 1.57x at 0a89dc3, before the second shot). Its first-run
+  speed-up falls with lines (2.14x at 500,000, 1.04x at 4M): the error
+  ratio at equal lines is about one, so a first run gains only what
+  classic's later passes cost beyond the store's tracing and iterations,
+  and at 4M lines the preprocess alone (2.40 s) takes four fifths of
+  classic's solve (2.95 s).
   - 58 % of classic's squared error is in the room's walls, ceiling and
     desks (the root) and 31 % more in two wall slabs that get few or no
-    lines of their own; the hierarchical runs err there 1.14-1.28 times as
+    lines of their own; the hierarchical runs err there 1.15-1.27 times as
     much as classic, since the pilot gives the subscenes 7 % of the lines
     and the root keeps 93 %.
   - The fluorescent strip's trough, which held a quarter of classic's
@@ -1097,8 +1116,8 @@ from this run's CSVs; what follows explains them, from the profiles in
   by `mpath-preprocess`), so it is the transport loop over the stored
   lines and little else (no BVH where every face is carried), while
   classic traces its first and second shots on every solve. soda's
-  kept-store solve (5.71x here, 5.34x at 5d53f7e on an Intel host, 6.88x at
-  7f78efc) is the shortest beside classic's: its fixed second (loading, opening the
+  kept-store solve (6.27x here, 5.71x in the run before, 5.34x at 5d53f7e
+  on an Intel host, 6.88x at 7f78efc) is the shortest beside classic's: its fixed second (loading, opening the
   store, the outputs) stays whatever the lines; these times include each
   program's start-up, about 0.03 s with the exec that asks for huge pages,
   and at 1M lines that is a sixth of a short solve.
