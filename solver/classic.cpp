@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "first_shot.h"
 #include "progress.h"
 #include "sampling.h"
 #include "transport.h"
@@ -41,7 +42,8 @@ uint64_t coverage_lines(const PatchMesh& mesh) {
 }
 
 PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, uint64_t lines,
-                       unsigned long long seed, unsigned pass, int shards, const std::string& sequence) {
+                       unsigned long long seed, unsigned pass, int shards, const std::string& sequence,
+                       uint64_t* local_lines) {
   const LineSequence points(sequence, seed, pass);
   const auto start = std::chrono::steady_clock::now();
   const BoxLineSampler sampler(line_box(mesh.bounds));
@@ -76,7 +78,19 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
     progress.advance(since_report);
   });
   progress.finish();
-  return finish_pass(in, acc, state, pass, start);
+  PassStats stats = finish_pass(in, acc, state, pass, start);
+  // Power on faces no line of the pass crossed, shot with local lines:
+  // otherwise it waits for a pass whose lines cross its face, and on a
+  // polygon that a coplanar one hides from every global line it waits for
+  // ever (docs/algorithm.md, "Power no line moves").
+  const std::vector<int> missed = faces_no_line_crossed(in, acc);
+  if (!missed.empty()) {
+    const uint64_t shot = shoot_unshot(mesh, tracer, missed, state, pass, seed, shards);
+    if (local_lines) *local_lines += shot;
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    stats.unshot_fraction = state.remaining_fraction();
+  }
+  return stats;
 }
 
 uint64_t classic_pass_lines(const Options& options, const PatchMesh& mesh, const IterationLog& log,

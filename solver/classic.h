@@ -1,7 +1,9 @@
 // Classic Multipath: after the first shot, passes of fresh uniform global
 // lines over the scene box, traced on the fly; crossing counts are forecast
 // (N lines cross a face of area A about N 2A/S times, S the box's area) and
-// what a face was due to send but no line took stays unshot for the next pass.
+// what a face was due to send but no line took stays unshot for the next
+// pass; the power of a face that no line of the pass crossed at all is shot
+// with local lines instead.
 #pragma once
 
 #include <cstdint>
@@ -55,9 +57,11 @@ void for_each_pass_line(uint64_t lo, uint64_t hi, Rng& order, F&& f) {
   for (uint64_t k = lo; k < hi; ++k) f(lo + permutation(k - lo));
 }
 
-// One pass of `lines` fresh global lines; exposed for tests and benchmarks.
+// One pass of `lines` fresh global lines, then the power on faces none of
+// them crossed shot with local lines (shoot_unshot; their count added to
+// `local_lines` when given); exposed for tests and benchmarks.
 PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiosityState& state, uint64_t lines,
                        unsigned long long seed, unsigned pass, int shards,
-                       const std::string& sequence = "random");
+                       const std::string& sequence = "random", uint64_t* local_lines = nullptr);
 
 }  // namespace mpath

@@ -109,6 +109,18 @@ void shoot_local_line(const PatchMesh& mesh, const RadiosityState& state, int fa
   receive_outcome(state, face, local_line_outcome(mesh, face, rng, nearest), power, acc);
 }
 
+// Unshot power the global lines cannot move (on faces no stored line
+// crosses, or that no line of a classic pass crossed: a polygon hidden under
+// a coplanar one, a patch too small for the pass) is shot with
+// kUncarriedLines local lines per face, like the first shot; their points
+// and directions come from stream kUncarriedStream, keyed by the pass and
+// the face, so that threads and ranks do not change the answer. Returns the
+// local lines cast.
+inline constexpr int kUncarriedLines = 16;
+inline constexpr unsigned kUncarriedStream = 7;
+uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<int> faces, RadiosityState& state,
+                      unsigned pass, unsigned long long seed, int shards_wanted);
+
 // Which faces the first shot shoots with local lines and how many lines each.
 struct FirstShotPlan {
   std::vector<int> emitters;          // in face order

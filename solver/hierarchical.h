@@ -65,14 +65,10 @@ Remaining remaining_power(const BoxStore& store, const RadiosityState& state);
 
 // Power no stored line can carry (on faces without a crossed proxy: small
 // patches in boxes with few lines) is shot with kUncarriedLines local lines
-// per face, like the first shot, so that it moves on instead of waiting;
-// returns the local lines cast. Run after each iteration.
-inline constexpr int kUncarriedLines = 16;
+// per face (shoot_unshot), like the first shot, so that it moves on instead
+// of waiting; returns the local lines cast. Run after each iteration.
 uint64_t shoot_uncarried(const PatchMesh& mesh, const TracerOnDemand& tracer, const BoxStore& store,
                          RadiosityState& state, unsigned pass, unsigned long long seed, int shards_wanted);
-// The unshot power of `faces` shot with kUncarriedLines local lines each.
-uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::vector<int> faces,
-                      RadiosityState& state, unsigned pass, unsigned long long seed, int shards_wanted);
 
 // One iteration of mpath-solve's stored-line methods with the options'
 // schedule and line power: hierarchical_iteration, then shoot_uncarried

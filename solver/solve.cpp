@@ -232,7 +232,7 @@ void run_iterations(const Options& options, const PatchMesh& mesh, const TracerO
   } else {
     iterate(options, state, log, [&](unsigned pass) {
       return classic_pass(mesh, tracer.get(), state, classic_pass_lines(options, mesh, log, state), options.lines.seed,
-                          pass, options.solver.shards, options.lines.sequence);
+                          pass, options.solver.shards, options.lines.sequence, &record.uncarried_lines);
     }, save);
   }
   if (!saved) write();

@@ -156,6 +156,19 @@ void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, 
   merge_gains(acc, state);
 }
 
+std::vector<int> faces_no_line_crossed(const PassInputs& in, const std::vector<ShardAccumulator>& acc) {
+  std::vector<int> faces;
+  for (size_t f = 0; f < in.faces.size(); ++f) {
+    bool held = false;
+    for (int c = 0; c < in.channels; ++c) held |= in.faces[f].quota[c] > 0;
+    if (!held) continue;
+    bool crossed = false;
+    for (const ShardAccumulator& a : acc) crossed |= a.faces[f].quota_used > 0;
+    if (!crossed) faces.push_back(static_cast<int>(f));
+  }
+  return faces;
+}
+
 PassStats finish_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, RadiosityState& state,
                       unsigned pass, std::chrono::steady_clock::time_point start) {
   merge_pass(in, acc, state);

@@ -183,6 +183,10 @@ void receive_in_contact(const RadiosityState& state, int from, int to, const dou
 // each face's quota that no line took stays unshot.
 void merge_pass(const PassInputs& in, const std::vector<ShardAccumulator>& acc, RadiosityState& state);
 
+// The faces that held a quota that no line of the pass crossed (so none of it
+// was taken), in face order: their power waits in place for a later pass.
+std::vector<int> faces_no_line_crossed(const PassInputs& in, const std::vector<ShardAccumulator>& acc);
+
 struct PassStats {
   int pass = 0;
   uint64_t lines = 0;
