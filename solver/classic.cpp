@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 
 #include "first_shot.h"
 #include "progress.h"
@@ -16,6 +17,24 @@ namespace mpath {
 namespace {
 
 constexpr unsigned kGlobalLineStream = 2;
+
+// The `keep` faces of `faces` holding the most unshot power (summed over the
+// channels; ties to the lower face), in face order.
+std::vector<int> most_unshot(std::vector<int> faces, const RadiosityState& state, size_t keep) {
+  if (faces.size() <= keep) return faces;
+  const auto power = [&](int f) {
+    double p = 0;
+    for (int c = 0; c < state.channels; ++c) p += state.unshot[state.at(static_cast<size_t>(f), c)];
+    return p;
+  };
+  std::nth_element(faces.begin(), faces.begin() + static_cast<std::ptrdiff_t>(keep), faces.end(), [&](int a, int b) {
+    const double pa = power(a), pb = power(b);
+    return pa != pb ? pa > pb : a < b;
+  });
+  faces.resize(keep);
+  std::sort(faces.begin(), faces.end());
+  return faces;
+}
 
 }  // namespace
 
@@ -82,8 +101,11 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
   // Power on faces no line of the pass crossed, shot with local lines:
   // otherwise it waits for a pass whose lines cross its face, and on a
   // polygon that a coplanar one hides from every global line it waits for
-  // ever (docs/algorithm.md, "Power no line moves").
-  const std::vector<int> missed = faces_no_line_crossed(in, acc);
+  // ever (docs/algorithm.md, "Power no line moves"). At most as many local
+  // lines as the pass had global ones, for the faces holding the most (with
+  // far fewer lines than patches most faces are missed; the others wait).
+  const std::vector<int> missed =
+      most_unshot(faces_no_line_crossed(in, acc), state, std::max<uint64_t>(1, lines / kUncarriedLines));
   if (!missed.empty()) {
     const uint64_t shot = shoot_unshot(mesh, tracer, missed, state, pass, seed, shards);
     if (local_lines) *local_lines += shot;

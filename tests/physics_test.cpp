@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "classic.h"
+#include "first_shot.h"
 #include "sampling.h"
 #include "scene_readers.h"
 #include "second_shot.h"
@@ -143,6 +145,30 @@ TEST(Furnace, PowerNoGlobalLineCanMoveIsShotWithLocalLines) {
   ASSERT_NEAR(sheet_area, area, 1e-9 * area);
   const double floor = power * (1 - rho) / (exitance * area);
   EXPECT_NEAR(floor, 1.0, 5 * rho / std::sqrt(crossings) + bias_bound) << "the floor and the sheet together";
+}
+
+// With far fewer lines than patches a pass misses most faces: its local
+// lines for them stop at as many as it had global lines, spent on the faces
+// holding the most power, and the rest waits for the next pass.
+TEST(Furnace, APassShootsAtMostAsManyLocalLinesAsItTracedGlobalOnes) {
+  const Scene scene = furnace_scene(0.5, 1.0);
+  const PatchMesh mesh = build_mesh(scene, 1e-3);  // about 20,000 patches
+  const Tracer tracer(mesh);
+  RadiosityState state = make_state(scene, mesh);
+  state.unshot = state.emitted_power;  // every face's emission waits for the pass
+  const uint64_t lines = 4'000;        // 0.6 crossings a face: half of them missed
+  uint64_t local = 0;
+  classic_pass(mesh, tracer, state, lines, 3, 1, 2, "halton", &local);
+  EXPECT_EQ(local, lines);
+  EXPECT_LT(std::fabs(state.energy_residual()) / state.emitted_total(), 1e-10);
+  // Fewer missed faces than that: every one of them shot.
+  RadiosityState dense = make_state(scene, mesh);
+  dense.unshot = dense.emitted_power;
+  uint64_t dense_local = 0;
+  classic_pass(mesh, tracer, dense, 40'000, 3, 1, 2, "halton", &dense_local);
+  EXPECT_GT(dense_local, 0u);
+  EXPECT_LT(dense_local, 40'000u);
+  EXPECT_EQ(dense_local % kUncarriedLines, 0u);
 }
 
 TEST(EnergyBalance, ClosesInAClosedSceneWithNothingEscaping) {
