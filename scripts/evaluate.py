@@ -1009,7 +1009,7 @@ from this run's CSVs; what follows explains them, from the profiles in
   -> 6.25x, 12.94 -> 11.36x, 5.90 -> 5.71x. The runs' seconds moved by
   -26 to +29 % from one run to the other, both methods, both ways, where
   the stores' sizes agree within 0.6 %: the host's, not the change's.
-- **This run: each seed's passes in an order of their own** (December 7,
+- **The run before: each seed's passes in an order of their own** (December 7,
   2026, at bbd65ff, the same host). A stored pass takes each chunk's lines
   in a pseudo-random order, which was seeded by the pass, the box and the
   chunk alone: the same in every seed's solve. A chunk's lines are stored
@@ -1038,6 +1038,29 @@ from this run's CSVs; what follows explains them, from the profiles in
   6.50x, 11.36 -> 12.11x, 5.71 -> 6.27x. The medians of the runs' seconds
   per scene and method moved by -14 to +10 % (classic's as much as the
   hierarchical runs'), where the stores' sizes are the same: the host's.
+- **This run: classic passes shoot the power no line of theirs moved**
+  (December 7, 2026, at bfc4757, the same host). The power on office3's
+  object 3 that classic left was on a disc half under a coplanar desk top:
+  the global lines meet the same one of two overlapping polygons every
+  time, and no line of any pass had crossed the 100 faces holding 98 % of
+  it. A classic pass now shoots the power of faces none of its lines
+  crossed with 16 local lines a face, as the hierarchical solve does
+  (docs/algorithm.md, "Power no line moves"). Every long classic reference
+  now converges (6.9e-6 to 9.8e-6 left, office3's 3.2e-4 before), and
+  office3's object check is 0.2 sigma RMS, its largest object 0.3 sigma
+  (object 3 was at 3.9). Every classic run of the ladders converges too
+  (13 of 80 stopped at the cap before, OFFICE's and ROOM's), in fewer
+  passes; the errors at equal lines moved by at most 0.07 points on
+  either side (office3's classic, within its seeds' spread). The medians
+  of classic's solve seconds over the hierarchical runs', against the run
+  before (the hierarchical code is the same, so its ratio is the host's):
+  OFFICE 0.64, ROOM 0.88, office2 0.81, office3 0.88, soda 0.96, BIG ROOM
+  1.01. So the first-run speed-ups fell where classic gained: ROOM 2.02 ->
+  1.80x, BIG ROOM 1.64 -> 1.69x, OFFICE 4.47 -> 3.59x, office2 1.42 ->
+  1.28x, office3 2.78 -> 2.47x, soda 1.49 -> 1.67x; kept-store solves
+  10.96 -> 9.87x, 8.92 -> 8.40x, 14.98 -> 13.81x, 6.50 -> 5.47x, 12.11 ->
+  10.03x, 6.27 -> 6.88x. Classic is the better baseline for it: it spends
+  fewer passes on power that was only waiting.
 - **Where the error lies.** The table under each scene splits each
   method's squared error by box. Wherever the hierarchy gives a small
   bright box lines of its own (a lamp in its shade: ROOM's, BIG ROOM's,
@@ -1060,13 +1083,11 @@ from this run's CSVs; what follows explains them, from the profiles in
   every entry. It was a fifth of each of OFFICE's 8M-line partial passes
   (docs/performance.md, "The plan of a partial pass").
 
-  Classic's own adaptive passes do not always converge within the configs'
-  cap (`solver.iterations = 20` in configs/office.toml and
-  configs/room.toml): OFFICE's classic runs and most of ROOM's stop there
-  with 0.1-0.5 % of the emitted power unshot (report.json,
-  `iterations.unshot_fraction`). Their times are those of 20 passes, and
-  their errors include the missing power, which is small beside their
-  noise.
+  Classic's own adaptive passes converged within the configs' cap
+  (`solver.iterations = 20` in configs/office.toml and configs/room.toml)
+  in every run here; before bfc4757 OFFICE's classic runs and some of
+  ROOM's stopped there with 0.1-0.5 % of the emitted power unshot, power
+  on faces that their thin passes' lines missed.
 - **Where a target is not met: BIG ROOM's first run.** A first run spends
   about four fifths of its time preprocessing, the first shot it traces
   for the store included (the table above). Per line the preprocess costs
@@ -1086,24 +1107,25 @@ from this run's CSVs; what follows explains them, from the profiles in
     of the run before, whose lines followed the Halton sequence's order).
   - With no error left in the lamp at all, the squared error would still be
     about 0.37 of classic's, an error ratio of 0.61 at equal lines. A first
-    run costs about what classic's solve does at equal lines (2.13 against
-    2.10 s at 4M, 0.79 against 1.02 s at 1M), and classic's seconds grow
-    more slowly than its lines at these budgets (1.02 to 3.65 s from 1M to
-    8M): reaching 2.5x would take the lamp's error gone and a cheaper line
-    both. The second shot, which cut both methods' error to a third, did
+    run costs about what classic's solve does at equal lines (2.79 against
+    2.59 s at 4M, 1.02 against 1.03 s at 1M, medians of this run), and
+    classic's seconds grow more slowly than its lines at these budgets
+    (1.03 to 4.48 s from 1M to 8M): reaching 2.5x would take the lamp's
+    error gone and a cheaper line both. The second shot, which cut both methods' error to a third, did
     not move that.
   - What is left is a cheaper line: the preprocess would have to trace,
     count, encode and compress a line for clearly less than a classic pass
     traces and transports one.
-- **office2's first run: the target missed** (1.42x against 1.5x, its
-  budgets 1.04-2.14x, 1.47x in CPU seconds; 1.47x and 1.48x in the two
-  runs before this one, 1.32x at 5d53f7e on an Intel host, 1.45x at
+- **office2's first run: the target missed** (1.28x against 1.5x, its
+  budgets 1.11-1.70x, 1.27x in CPU seconds; 1.42x in the run before, with
+  classic's passes that left power waiting on faces their lines missed;
+  1.47x and 1.48x before that, 1.32x at 5d53f7e on an Intel host, 1.45x at
   6c08a0c and 1.57x at 0a89dc3, before the second shot). Its first-run
-  speed-up falls with lines (2.14x at 500,000, 1.04x at 4M): the error
+  speed-up falls with lines (1.70x at 500,000, 1.11x at 4M): the error
   ratio at equal lines is about one, so a first run gains only what
   classic's later passes cost beyond the store's tracing and iterations,
-  and at 4M lines the preprocess alone (2.40 s) takes four fifths of
-  classic's solve (2.95 s).
+  and at 4M lines the preprocess alone (2.18 s) takes four fifths of
+  classic's solve (2.64 s).
   - 58 % of classic's squared error is in the room's walls, ceiling and
     desks (the root) and 31 % more in two wall slabs that get few or no
     lines of their own; the hierarchical runs err there 1.15-1.27 times as
@@ -1124,7 +1146,7 @@ from this run's CSVs; what follows explains them, from the profiles in
   by `mpath-preprocess`), so it is the transport loop over the stored
   lines and little else (no BVH where every face is carried), while
   classic traces its first and second shots on every solve. soda's
-  kept-store solve (6.27x here, 5.71x in the run before, 5.34x at 5d53f7e
+  kept-store solve (6.88x here, 6.27x and 5.71x in the runs before, 5.34x at 5d53f7e
   on an Intel host, 6.88x at 7f78efc) is the shortest beside classic's: its fixed second (loading, opening the
   store, the outputs) stays whatever the lines; these times include each
   program's start-up, about 0.03 s with the exec that asks for huge pages,
