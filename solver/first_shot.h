@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "config.h"
@@ -120,6 +121,12 @@ inline constexpr int kUncarriedLines = 16;
 inline constexpr unsigned kUncarriedStream = 7;
 uint64_t shoot_unshot(const PatchMesh& mesh, const Tracer& tracer, std::vector<int> faces, RadiosityState& state,
                       unsigned pass, unsigned long long seed, int shards_wanted);
+// The same with the tracer built only when some face needs the shot: a
+// kept-store solve whose faces every stored line carries builds no BVH.
+inline uint64_t shoot_unshot(const PatchMesh& mesh, const TracerOnDemand& tracer, std::vector<int> faces,
+                             RadiosityState& state, unsigned pass, unsigned long long seed, int shards_wanted) {
+  return faces.empty() ? 0 : shoot_unshot(mesh, tracer.get(), std::move(faces), state, pass, seed, shards_wanted);
+}
 
 // Which faces the first shot shoots with local lines and how many lines each.
 struct FirstShotPlan {

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <utility>
 
 #include "error.h"
 #include "first_shot.h"
@@ -471,8 +472,7 @@ uint64_t shoot_uncarried(const PatchMesh& mesh, const TracerOnDemand& tracer, co
       if (any) faces.push_back(g);
     }
   }
-  if (faces.empty()) return 0;
-  return shoot_unshot(mesh, tracer.get(), faces, state, pass, seed, shards_wanted);
+  return shoot_unshot(mesh, tracer, std::move(faces), state, pass, seed, shards_wanted);
 }
 
 PassStats stored_iteration(const Options& options, const PatchMesh& mesh, const TracerOnDemand& tracer,

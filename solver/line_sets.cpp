@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <mutex>
+#include <utility>
 
 #include "error.h"
 #include "first_shot.h"
@@ -851,7 +852,7 @@ PassStats line_set_iteration(const PatchMesh& mesh, const TracerOnDemand& tracer
         waiting.push_back(f);
         break;
       }
-  const uint64_t shot = waiting.empty() ? 0 : shoot_unshot(mesh, tracer.get(), waiting, state, pass, seed, shards_wanted);
+  const uint64_t shot = shoot_unshot(mesh, tracer, std::move(waiting), state, pass, seed, shards_wanted);
   if (uncarried_lines) *uncarried_lines += shot;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   stats.unshot_fraction = state.remaining_fraction();

@@ -386,8 +386,15 @@ TEST(StoredShot, TheSolveReadsThePreprocessorsFirstShot) {
   EXPECT_EQ(read["first_shot"]["lines"].get<uint64_t>(), lines);
   EXPECT_EQ(read["first_shot"]["lines_from"].get<std::string>(), "store");
   EXPECT_LT(std::abs(read["energy"]["relative_residual"].get<double>()), 1e-9);
+  // Both shots read and every face carried by the stored lines: nothing
+  // needs a traced line, and the solve builds no BVH (shoot_unshot with the
+  // on-demand tracer); a solve tracing its first shot builds it.
+  EXPECT_TRUE(read["second_shot"]["from_store"].get<bool>());
+  EXPECT_EQ(read["lines"]["local_uncarried"].get<uint64_t>(), 0u);
+  EXPECT_EQ(read["timings"]["bvh"].get<double>(), 0.0);
 
   const nlohmann::json other = solve("other", " first_shot.lines=60000");
+  EXPECT_GT(other["timings"]["bvh"].get<double>(), 0.0);
   EXPECT_FALSE(other["first_shot"]["from_store"].get<bool>());
   EXPECT_NE(other["first_shot"]["traced_because"].get<std::string>().find("other line counts"), std::string::npos);
 
