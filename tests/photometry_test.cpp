@@ -97,12 +97,10 @@ TEST(Photometry, EmissionSeenByBothStrategiesIsUnbiased) {
   std::vector<double> readings;
   for (unsigned seed = 1; seed <= 8; ++seed)
     for (const GridPoint& p : measure_grid(g, mesh, tracer, state, {}, seed).points) readings.push_back(p.irradiance[0]);
-  double mean = 0, var = 0;
-  for (double r : readings) mean += r / readings.size();
-  for (double r : readings) var += (r - mean) * (r - mean) / (readings.size() - 1);
-  const double sigma = std::sqrt(var);
+  const test::SampleStats stats = test::sample_stats(readings);
+  const double sigma = std::sqrt(stats.variance);
   EXPECT_LT(sigma, 0.05 * 2.5) << "the two strategies together should be far less noisy than either";
-  EXPECT_NEAR(mean, 2.5, 4 * sigma / std::sqrt(readings.size()));
+  EXPECT_NEAR(stats.mean, 2.5, 4 * sigma / std::sqrt(readings.size()));
   for (double r : readings) EXPECT_NEAR(r, 2.5, 5 * sigma);
 }
 

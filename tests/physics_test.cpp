@@ -390,11 +390,9 @@ TEST(HaltonLines, StoredPassesOfSeveralSeedsErrIndependently) {
   }
   double t_squared = 0;
   for (size_t f = 0; f < 6; ++f) {
-    double mean = 0, var = 0;
-    for (const double e : errors[f]) mean += e / kSeeds;
-    for (const double e : errors[f]) var += (e - mean) * (e - mean) / (kSeeds - 1);
-    const double t = mean / std::sqrt(var / kSeeds);
-    std::printf("wall %zu: mean error %+.4f %%, t %+.2f\n", f, 100 * mean, t);
+    const test::SampleStats e = test::sample_stats(errors[f]);
+    const double t = e.mean / std::sqrt(e.variance / kSeeds);
+    std::printf("wall %zu: mean error %+.4f %%, t %+.2f\n", f, 100 * e.mean, t);
     t_squared += t * t;
   }
   EXPECT_LT(t_squared, 40.0);
@@ -481,24 +479,17 @@ TEST(SecondShot, IsUnbiasedAndQuietsWhatALampShadeSendsToTheRoom) {
         reflected[with].push_back(std::move(r));
         by_object[with].push_back(sum);
       }
-    const auto mean_var = [](const std::vector<double>& v) {
-      double m = 0, q = 0;
-      for (double x : v) m += x;
-      m /= static_cast<double>(v.size());
-      for (double x : v) q += (x - m) * (x - m);
-      return std::pair{m, q / static_cast<double>(v.size() - 1)};
-    };
     for (int k = 0; k < 3; ++k) {
-      std::array<std::pair<double, double>, 2> mv;
+      std::array<test::SampleStats, 2> mv;
       for (int with = 0; with < 2; ++with) {
         std::vector<double> v;
         for (const auto& o : by_object[with]) v.push_back(o[static_cast<size_t>(k)]);
-        mv[with] = mean_var(v);
+        mv[with] = test::sample_stats(v);
       }
-      const double se = std::sqrt((mv[0].second + mv[1].second) / kSeeds);
-      EXPECT_LT(std::fabs(mv[1].first - mv[0].first), 4.5 * se + 1e-12 * std::fabs(mv[0].first))
-          << "room " << room << ", object " << scene.objects[static_cast<size_t>(k)].name << ": " << mv[0].first
-          << " without, " << mv[1].first << " with the second shot";
+      const double se = std::sqrt((mv[0].variance + mv[1].variance) / kSeeds);
+      EXPECT_LT(std::fabs(mv[1].mean - mv[0].mean), 4.5 * se + 1e-12 * std::fabs(mv[0].mean))
+          << "room " << room << ", object " << scene.objects[static_cast<size_t>(k)].name << ": " << mv[0].mean
+          << " without, " << mv[1].mean << " with the second shot";
     }
     // The room's faces: their variance from seed to seed, area-weighted.
     std::array<double, 2> variance{};
@@ -507,7 +498,7 @@ TEST(SecondShot, IsUnbiasedAndQuietsWhatALampShadeSendsToTheRoom) {
         if (object[f] != 0) continue;
         std::vector<double> v;
         for (const auto& r : reflected[with]) v.push_back(r[f]);
-        variance[with] += area[f] * mean_var(v).second;
+        variance[with] += area[f] * test::sample_stats(v).variance;
       }
     EXPECT_LT(variance[1], 0.6 * variance[0]) << "room " << room << ": the room's variance with the second shot is "
                                               << variance[1] / variance[0] << " of that without";

@@ -52,6 +52,16 @@ std::string read_file(const fs::path& path) {
   return s.str();
 }
 
+SampleStats sample_stats(const std::vector<double>& x) {
+  SampleStats s;
+  if (x.size() < 2) throw std::invalid_argument("sample_stats: fewer than two samples");
+  for (const double v : x) s.mean += v;
+  s.mean /= static_cast<double>(x.size());
+  for (const double v : x) s.variance += (v - s.mean) * (v - s.mean);
+  s.variance /= static_cast<double>(x.size() - 1);
+  return s;
+}
+
 RunResult run(const std::string& command) {
   RunResult r;
   FILE* pipe = popen((command + " 2>&1").c_str(), "r");

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "classic.h"
 #include "config.h"
@@ -44,6 +45,14 @@ std::filesystem::path shared_scenes();
 // beside); when it is absent the test fails with what is missing and how to
 // get it, and the path is empty.
 std::filesystem::path shared_scene(const std::string& relative);
+
+// The mean of independent samples and their unbiased variance (n - 1 in the
+// denominator; at least two samples): a test's standard error is
+// sqrt(variance / n).
+struct SampleStats {
+  double mean = 0, variance = 0;
+};
+SampleStats sample_stats(const std::vector<double>& x);
 
 int add_material(Scene& scene, const std::string& name, double rho, double radiance, bool two_sided = false);
 int add_object(Scene& scene, const std::string& name);
