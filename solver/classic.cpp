@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <utility>
 
 #include "first_shot.h"
 #include "progress.h"
@@ -104,10 +105,10 @@ PassStats classic_pass(const PatchMesh& mesh, const Tracer& tracer, RadiositySta
   // ever (docs/algorithm.md, "Power no line moves"). At most as many local
   // lines as the pass had global ones, for the faces holding the most (with
   // far fewer lines than patches most faces are missed; the others wait).
-  const std::vector<int> missed =
+  std::vector<int> missed =
       most_unshot(faces_no_line_crossed(in, acc), state, std::max<uint64_t>(1, lines / kUncarriedLines));
   if (!missed.empty()) {
-    const uint64_t shot = shoot_unshot(mesh, tracer, missed, state, pass, seed, shards);
+    const uint64_t shot = shoot_unshot(mesh, tracer, std::move(missed), state, pass, seed, shards);
     if (local_lines) *local_lines += shot;
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     stats.unshot_fraction = state.remaining_fraction();
