@@ -98,13 +98,19 @@ void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore
   thread_local std::vector<Owner> on_line;
   on_line.resize(static_cast<size_t>(n));
   bool invisible = false;
+  // Whether some crossing is of a patch the root does not hold directly
+  // (in the root's lines only those are counted here).
+  const bool root = box_index_ == 0;
+  bool counted = !root;
   for (int i = 0; i < n; ++i) {
     Owner o = owner_[events[i].id];
     // Bit 0: the side facing +1 (along the line) is invisible; bit 1: the side facing -1.
     if (!events[i].along) o.invisible = static_cast<uint8_t>(((o.invisible & 1) << 1) | (o.invisible >> 1));
     invisible |= o.invisible != 0;
+    counted |= o.box != 0;
     on_line[static_cast<size_t>(i)] = o;
   }
+  if (!counted) return;
   const auto seen_towards = [&](int x, int d) {
     return (on_line[static_cast<size_t>(x)].invisible >> (d > 0 ? 0 : 1)) & 1 ? kInvisibleSide : 0;
   };
@@ -113,7 +119,8 @@ void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore
   // (the counters of a box's patches are megabytes, met at random).
   thread_local std::vector<uint32_t*> counters;
   counters.clear();
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; i < n; ++i) {
+    if (root && on_line[static_cast<size_t>(i)].box == 0) continue;  // finish_tally's
     for (const int dir : {+1, -1}) {
       // Without invisible backs on the line the next crossing seen is the next one.
       const int j = invisible ? next_seen(i, dir, n, seen_towards) : i + dir;
@@ -125,7 +132,17 @@ void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore
       prefetch(c);
       counters.push_back(c);
     }
+  }
   for (uint32_t* c : counters) ++*c;
+}
+
+void ChunkTracer::finish_tally(BoxTally& tally) const {
+  if (class_span_ == 0 || box_index_ != 0) return;
+  linestore::BoxCounts& counts = tally.counts;
+  for (size_t k = 0; k < owner_.size(); ++k)
+    if (owner_[k].box == 0)
+      for (size_t side = 0; side < 2; ++side)
+        counts.class_crossings[(k * 2 + side) * class_span_] += counts.patch_crossings[k];
 }
 
 void ChunkTracer::trace(uint64_t chunk, TracedChunk& out, BoxTally& tally) const {

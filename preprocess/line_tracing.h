@@ -47,12 +47,19 @@ class ChunkTracer {
   uint64_t lines_in(uint64_t chunk) const;
   // An empty tally of the right sizes for this box.
   BoxTally empty_tally() const;
+  // Completes a tally once all its lines are counted: the class counts that
+  // count_classes leaves to the crossing counts (below).
+  void finish_tally(BoxTally& tally) const;
   // The lines of chunk `chunk`; adds what they count to `tally`.
   void trace(uint64_t chunk, TracedChunk& out, BoxTally& tally) const;
 
  private:
   // Transparent boxes: adds the pairs of consecutive crossings of a line's
-  // `n` events to the class counts.
+  // `n` events to the class counts. In the root's lines a crossing of a
+  // patch the root holds directly pairs in class 0 whatever it meets next
+  // (the smallest box holding both is the root; off the line is the
+  // root's outside), on both its sides: those counts equal the patch's
+  // crossing counts, and finish_tally writes them from there instead.
   void count_classes(const linestore::Event* events, int n, linestore::BoxCounts& counts) const;
   // The face (or kBlackSide, kInvisibleSide) event `e` turns towards
   // direction d; a child box is never invisible.

@@ -214,6 +214,7 @@ linestore::StoreFile trace_box(const Options& options, const PatchMesh& mesh, co
   progress.finish();
   BoxTally total = chunks.empty_tally();
   for (const BoxTally& t : tallies) t.merge_into(total);
+  chunks.finish_tally(total);
   std::vector<std::pair<uint64_t, uint32_t>> first_met(total.first_met.begin(), total.first_met.end());
   std::sort(first_met.begin(), first_met.end());
   linestore::select_associated(first_met, total.counts);
