@@ -3,6 +3,7 @@
 // crossing counts, and an index that lets readers seek to any chunk.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -33,7 +34,7 @@ struct BoxCounts {
   // Transparent boxes (line sets) only: per patch of the box, per side (front,
   // back) and per class the box's lines carry there (`span` of them, its own
   // box's first), the crossings whose next crossing on that side's way is a
-  // patch of that class; index (patch * 2 + side) * span + class.
+  // patch of that class; at class_slot(patch, side, span, class).
   std::vector<uint32_t> class_crossings;
 
   void resize(size_t patches, size_t wall_ars, size_t child_ars, size_t class_span = 0);
@@ -44,6 +45,10 @@ struct BoxCounts {
   void add_counts(const BoxCounts& other);
   bool operator==(const BoxCounts&) const = default;
 };
+
+// Where class_crossings holds the count of (patch, side, class) for a box
+// whose lines carry `span` classes.
+inline size_t class_slot(size_t patch, size_t side, size_t span, size_t cls) { return (patch * 2 + side) * span + cls; }
 
 // Top associated patches from (AR, patch) -> count tallies.
 void select_associated(const std::vector<std::pair<uint64_t, uint32_t>>& tallies, BoxCounts& counts);

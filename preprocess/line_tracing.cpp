@@ -128,7 +128,8 @@ void ChunkTracer::count_classes(const linestore::Event* events, int n, linestore
                                      j < 0 || j >= n ? -1 : on_line[static_cast<size_t>(j)].box, box_index_ == 0);
       if (k < 0) continue;
       const int side = (dir > 0) == events[i].along ? 0 : 1;
-      uint32_t* c = &counts.class_crossings[(size_t{events[i].id} * 2 + side) * class_span_ + static_cast<size_t>(k)];
+      uint32_t* c = &counts.class_crossings[linestore::class_slot(events[i].id, static_cast<size_t>(side),
+                                                                   static_cast<size_t>(class_span_), static_cast<size_t>(k))];
       prefetch(c);
       counters.push_back(c);
     }
@@ -142,7 +143,8 @@ void ChunkTracer::finish_tally(BoxTally& tally) const {
   for (size_t k = 0; k < owner_.size(); ++k)
     if (owner_[k].box == 0)
       for (size_t side = 0; side < 2; ++side)
-        counts.class_crossings[(k * 2 + side) * class_span_] += counts.patch_crossings[k];
+        counts.class_crossings[linestore::class_slot(k, side, static_cast<size_t>(class_span_), 0)] +=
+            counts.patch_crossings[k];
 }
 
 void ChunkTracer::trace(uint64_t chunk, TracedChunk& out, BoxTally& tally) const {

@@ -78,7 +78,7 @@ void count_box(const BoxStore& store, const Hierarchy& h, LineSets& sets, int x,
       const uint32_t first = lines.entry[face], end = lines.entry[face + 1];
       counts.crossings[lines.slot[end - 1]] += box.counts.patch_crossings[k];  // this box's own class at the face
       for (uint32_t e = first; e < end; ++e) {
-        const double n = box.counts.class_crossings[(k * 2 + side) * span + (e - first)];
+        const double n = box.counts.class_crossings[linestore::class_slot(k, side, span, e - first)];
         lines.carried[e] = n;
         counts.carriers[lines.slot[e]] += n;
       }
